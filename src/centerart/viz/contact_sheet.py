@@ -1,0 +1,44 @@
+"""Contact sheets: grids of labelled images that a person can scan at a glance."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+
+def _font(size: int):
+    try:
+        return ImageFont.load_default(size=size)
+    except TypeError:  # very old Pillow
+        return ImageFont.load_default()
+
+
+def labelled(image: np.ndarray, text: str, size: int = 12) -> np.ndarray:
+    """Image with a dark caption bar at the top."""
+    img = Image.fromarray(image)
+    draw = ImageDraw.Draw(img)
+    draw.rectangle([0, 0, img.width, size + 6], fill=(20, 20, 20))
+    draw.text((4, 2), text, fill=(240, 240, 240), font=_font(size))
+    return np.asarray(img)
+
+
+def grid(rows: Sequence[Sequence[np.ndarray]], pad: int = 4, background=(255, 255, 255)) -> np.ndarray:
+    """Tile rows of equally sized images into one image."""
+    h, w = rows[0][0].shape[:2]
+    ncols = max(len(r) for r in rows)
+    out = np.full((len(rows) * (h + pad) + pad, ncols * (w + pad) + pad, 3), background, np.uint8)
+    for i, row in enumerate(rows):
+        for j, img in enumerate(row):
+            y, x = pad + i * (h + pad), pad + j * (w + pad)
+            out[y : y + h, x : x + w] = img[..., :3]
+    return out
+
+
+def save_png(image: np.ndarray, path: Path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(image).save(path)
+    return path
