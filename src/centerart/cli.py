@@ -76,9 +76,7 @@ COMMANDS: dict[str, dict[str, Command]] = {
             _objects_generate_run,
             "generate procedural articulated objects (PartNet-Mobility layout)",
         ),
-        "show": Command(
-            _objects_show, _objects_show_run, "contact sheet of objects at closed/half/open states"
-        ),
+        "show": Command(_objects_show, _objects_show_run, "contact sheet of objects at closed/half/open states"),
     },
     "demo": {"": Command(_demo, _demo_run, "the main job on its built-in default (see README quick start)")},
 }

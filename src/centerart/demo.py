@@ -27,7 +27,5 @@ class DemoConfig:
 def run_demo(cfg: DemoConfig) -> None:
     objects = Path(cfg.out) / "objects"
     generate_objects(GenerateObjectsConfig(out=objects, category="all", count=cfg.count, seed=cfg.seed))
-    sheet = show_objects(
-        ShowObjectsConfig(path=objects, out=Path(cfg.out) / "objects.png", objects_per_row=2)
-    )
+    sheet = show_objects(ShowObjectsConfig(path=objects, out=Path(cfg.out) / "objects.png", objects_per_row=2))
     print(f"objects in {objects}\npicture: {sheet}")

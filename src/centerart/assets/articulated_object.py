@@ -136,9 +136,7 @@ class ArticulatedObject:
         model_cat = str(meta.get("model_cat", "Unknown"))
         category = normalize_category(model_cat)
         generated = (
-            meta.get("generator", {}).get("name") == "centerart"
-            if isinstance(meta.get("generator"), dict)
-            else False
+            meta.get("generator", {}).get("name") == "centerart" if isinstance(meta.get("generator"), dict) else False
         )
 
         raw_joints = {j.name: j for j in robot.joints}
@@ -159,9 +157,7 @@ class ArticulatedObject:
             raise AssetError(urdf_path, f"target joint {chosen!r} not found (joints: {sorted(raw_joints)})")
         raw_target = raw_joints[chosen]
         if raw_target.type not in ("revolute", "prismatic"):
-            raise AssetError(
-                urdf_path, f"target joint {chosen!r} is {raw_target.type}, not revolute/prismatic"
-            )
+            raise AssetError(urdf_path, f"target joint {chosen!r} is {raw_target.type}, not revolute/prismatic")
         if raw_target.limit is None or raw_target.limit.lower is None or raw_target.limit.upper is None:
             raise AssetError(urdf_path, f"joint {chosen!r} has no <limit lower=... upper=...>")
         if not raw_target.limit.upper > raw_target.limit.lower:
@@ -178,16 +174,12 @@ class ArticulatedObject:
         held.pop(chosen, None)
         for name, value in (held_states or {}).items():
             if name not in held:
-                raise AssetError(
-                    urdf_path, f"held_states names {name!r}, which is not a non-target movable joint"
-                )
+                raise AssetError(urdf_path, f"held_states names {name!r}, which is not a non-target movable joint")
             held[name] = float(value)
 
         front = str(meta.get("front_axis", "+x" if generated else "-x"))
         if front not in BASE_ROTATIONS:
-            raise AssetError(
-                folder / "meta.json", f"front_axis {front!r} is not one of {sorted(BASE_ROTATIONS)}"
-            )
+            raise AssetError(folder / "meta.json", f"front_axis {front!r} is not one of {sorted(BASE_ROTATIONS)}")
         obj = cls(
             path=folder,
             category=category,
@@ -417,9 +409,7 @@ def _load_mesh_file(path: str) -> trimesh.Trimesh:
     return loaded
 
 
-def _load_parts(
-    robot: yourdfpy.Robot, folder: Path, urdf_path: Path, collision: bool
-) -> dict[str, list[Part]]:
+def _load_parts(robot: yourdfpy.Robot, folder: Path, urdf_path: Path, collision: bool) -> dict[str, list[Part]]:
     named_colors = _material_colors(robot)
     out: dict[str, list[Part]] = {}
     for link in robot.links:
@@ -430,9 +420,7 @@ def _load_parts(
             if geom.mesh is not None:
                 mesh_path = (folder / geom.mesh.filename).resolve()
                 if not mesh_path.is_file():
-                    raise AssetError(
-                        urdf_path, f"link {link.name!r} names a missing mesh file {geom.mesh.filename}"
-                    )
+                    raise AssetError(urdf_path, f"link {link.name!r} names a missing mesh file {geom.mesh.filename}")
                 try:
                     mesh = _load_mesh_file(str(mesh_path)).copy()
                 except Exception as err:
@@ -442,9 +430,7 @@ def _load_parts(
             elif geom.box is not None:
                 mesh = trimesh.creation.box(extents=geom.box.size)
             elif geom.cylinder is not None:
-                mesh = trimesh.creation.cylinder(
-                    radius=geom.cylinder.radius, height=geom.cylinder.length, sections=24
-                )
+                mesh = trimesh.creation.cylinder(radius=geom.cylinder.radius, height=geom.cylinder.length, sections=24)
             elif geom.sphere is not None:
                 mesh = trimesh.creation.icosphere(subdivisions=2, radius=geom.sphere.radius)
             else:
@@ -500,9 +486,7 @@ def _auto_scale(robot, raw_joints, visual_parts, root, category) -> float:
             origin = j.origin if j.origin is not None else np.eye(4)
             poses[j.child] = poses[parent] @ origin
             stack.append(j.child)
-    zs = [
-        apply_transform(poses[link], p.mesh.vertices)[:, 2] for link, ps in visual_parts.items() for p in ps
-    ]
+    zs = [apply_transform(poses[link], p.mesh.vertices)[:, 2] for link, ps in visual_parts.items() for p in ps]
     if not zs:
         return 1.0
     z = np.concatenate(zs)

@@ -136,9 +136,7 @@ class Builder:
         """A non-moving front (control panel) over a cell, optionally with a row of control knobs."""
         g, td = FRONT_GAP, self.td
         prims = [
-            box_between(
-                [-EMBED, cell.y0 + g / 2, cell.z0 + g / 2], [g + td, cell.y1 - g / 2, cell.z1 - g / 2]
-            ),
+            box_between([-EMBED, cell.y0 + g / 2, cell.z0 + g / 2], [g + td, cell.y1 - g / 2, cell.z1 - g / 2]),
             box_between([-self.t, cell.y0 + g / 2, cell.z0 + g / 2], [0.0, cell.y1 - g / 2, cell.z1 - g / 2]),
         ]
         self.base.append(VisualGroup(f"panel_{len(self.base)}", prims, rgba(color), material))
@@ -147,9 +145,7 @@ class Builder:
             r = min(0.018, 0.3 * cell.height)
             ys = np.linspace(cell.y0, cell.y1, knobs + 2)[1:-1]
             kp = [cylinder_along(0, [g + td + 0.008 - EMBED, y, zc], r, 0.016) for y in ys]
-            self.base.append(
-                VisualGroup(f"knobs_{len(self.base)}", kp, rgba(knob_color or (0.1, 0.1, 0.1)), "plastic")
-            )
+            self.base.append(VisualGroup(f"knobs_{len(self.base)}", kp, rgba(knob_color or (0.1, 0.1, 0.1)), "plastic"))
 
     # ------------------------------------------------------------- moving fronts
     def door(
@@ -199,9 +195,7 @@ class Builder:
             )
         free_edge = {"left": "right", "right": "left", "bottom": "top", "top": "bottom"}[hinge]
         self._handle(groups, handle, lo, hi, free_edge, strip[0] if strip else 0.0)
-        return self._add_moving(
-            f"door_{len(self.links)}", groups, origin, axis, "revolute", 0.0, upper, "door"
-        )
+        return self._add_moving(f"door_{len(self.links)}", groups, origin, axis, "revolute", 0.0, upper, "door")
 
     def drawer(self, cell: Cell, color, material: str, handle: dict, travel_fraction: float) -> str:
         """A drawer: front slab over ``cell`` plus an open-top tray sliding along +x. Returns the joint name."""
@@ -229,10 +223,7 @@ class Builder:
         )
 
     def _add_moving(self, name, groups, origin, axis, jtype, lower, upper, role) -> str:
-        shifted = [
-            VisualGroup(g.name, [p.shifted(-origin) for p in g.primitives], g.rgba, g.material)
-            for g in groups
-        ]
+        shifted = [VisualGroup(g.name, [p.shifted(-origin) for p in g.primitives], g.rgba, g.material) for g in groups]
         self.links.append(LinkSpec(name, shifted, density=self._density(role)))
         damping, friction = (0.2, 0.05) if jtype == "revolute" else (2.0, 0.1)
         self.joints.append(
@@ -259,9 +250,7 @@ class Builder:
     def _density(self, role: str) -> float:
         # Effective density of a door/drawer of this category: appliance doors are steel skins with insulation,
         # furniture fronts are MDF or wood (600-750 kg/m^3).
-        return {"refrigerator": 350.0, "oven": 900.0, "dishwasher": 600.0, "microwave": 700.0}.get(
-            self.category, 650.0
-        )
+        return {"refrigerator": 350.0, "oven": 900.0, "dishwasher": 600.0, "microwave": 700.0}.get(self.category, 650.0)
 
     # ------------------------------------------------------------- handles
     def _handle(self, groups: list[VisualGroup], h: dict, lo, hi, free_edge: str, strip: float) -> None:
@@ -311,9 +300,7 @@ class Builder:
                     leg_half = np.full(3, r)
                     leg_half[0] = 0.0
                     prims.append(
-                        box_between(
-                            p - leg_half - np.array([EMBED, 0, 0]), p + leg_half + np.array([s, 0, 0])
-                        )
+                        box_between(p - leg_half - np.array([EMBED, 0, 0]), p + leg_half + np.array([s, 0, 0]))
                     )
             groups.append(VisualGroup("handle", prims, color, "metal"))
             self.handles.append(HandleSpec(kind, "__pending__", grip_c, axis_vec, length, 2 * r, s - r))
@@ -355,15 +342,11 @@ class Builder:
             lo_p = edge - half + np.array([-EMBED, 0, 0])
             hi_p = edge + half + np.array([depth, 0, 0])
             groups.append(VisualGroup("handle", [box_between(lo_p, hi_p)], color, "metal"))
-            self.handles.append(
-                HandleSpec("lip", "__pending__", (lo_p + hi_p) / 2, axis_vec, length, thick, 0.0)
-            )
+            self.handles.append(HandleSpec("lip", "__pending__", (lo_p + hi_p) / 2, axis_vec, length, thick, 0.0))
         else:
             raise ValueError(f"unknown handle type {kind!r}")
 
-    def sample_handle(
-        self, kinds: tuple[str, ...], weights: tuple[float, ...], long_bar: bool = False
-    ) -> dict:
+    def sample_handle(self, kinds: tuple[str, ...], weights: tuple[float, ...], long_bar: bool = False) -> dict:
         rng = self.rng
         kind = str(rng.choice(kinds, p=np.asarray(weights) / np.sum(weights)))
         metal = PALETTES["metal"][rng.integers(len(PALETTES["metal"]))]
@@ -391,8 +374,7 @@ class Builder:
         allpts = np.concatenate(pts)
         center = (allpts.min(0) + allpts.max(0)) / 2
         base.groups = [
-            VisualGroup(g.name, [p.shifted(-center) for p in g.primitives], g.rgba, g.material)
-            for g in base.groups
+            VisualGroup(g.name, [p.shifted(-center) for p in g.primitives], g.rgba, g.material) for g in base.groups
         ]
         for j in self.joints:
             j.origin = j.origin - center

@@ -121,9 +121,7 @@ def generate_objects(cfg: GenerateObjectsConfig) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)
     version = code_version()
-    jobs = [
-        (c, i, cfg.seed, str(out), cfg.skip_checks, version) for c in categories for i in range(cfg.count)
-    ]
+    jobs = [(c, i, cfg.seed, str(out), cfg.skip_checks, version) for c in categories for i in range(cfg.count)]
     records = sorted(parallel_map(_generate_one, jobs, cfg.workers, desc="objects"), key=lambda r: r["id"])
     per_category = {}
     for c in categories:

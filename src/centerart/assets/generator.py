@@ -121,9 +121,7 @@ def _oven(rng) -> ObjectSpec:
             b.sample_handle(("bar", "u", "lip"), (0.5, 0.2, 0.3)),
             u(rng, 0.6, 0.8),
         )
-    return b.finish(
-        target, {"width": W, "depth": D, "height": H, "drawer": has_drawer, "handle": handle["type"]}
-    )
+    return b.finish(target, {"width": W, "depth": D, "height": H, "drawer": has_drawer, "handle": handle["type"]})
 
 
 def _refrigerator(rng) -> ObjectSpec:
@@ -171,12 +169,8 @@ def _refrigerator(rng) -> ObjectSpec:
         main = Cell(-W / 2, W / 2, split, H, frozenset({"left", "right", "top"}))
         bottom = Cell(-W / 2, W / 2, plinth, split, frozenset({"left", "right", "bottom"}))
         h = b.sample_handle(handle_kinds, handle_w, long_bar=True)
-        joints.append(
-            b.door(main, hinge, u(rng, 1.7, 2.2), body, "metal", {**h, "along": u(rng, 0.25, 0.45)})
-        )
-        joints.append(
-            b.drawer(bottom, body, "metal", {**h, "along": 0.8, "length": 0.5 * W}, u(rng, 0.6, 0.75))
-        )
+        joints.append(b.door(main, hinge, u(rng, 1.7, 2.2), body, "metal", {**h, "along": u(rng, 0.25, 0.45)}))
+        joints.append(b.drawer(bottom, body, "metal", {**h, "along": 0.8, "length": 0.5 * W}, u(rng, 0.6, 0.75)))
     target = joints[int(rng.integers(len(joints)))]
     return b.finish(target, {"width": W, "depth": D, "height": H, "layout": layout, "hinge": hinge})
 

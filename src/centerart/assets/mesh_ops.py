@@ -21,21 +21,15 @@ def to_manifold(mesh: trimesh.Trimesh) -> manifold3d.Manifold:
 
 def from_manifold(m: manifold3d.Manifold) -> trimesh.Trimesh:
     out = m.to_mesh()
-    return trimesh.Trimesh(
-        np.asarray(out.vert_properties[:, :3], float), np.asarray(out.tri_verts), process=True
-    )
+    return trimesh.Trimesh(np.asarray(out.vert_properties[:, :3], float), np.asarray(out.tri_verts), process=True)
 
 
 def union(meshes: list[trimesh.Trimesh]) -> trimesh.Trimesh:
     """Boolean union of closed meshes; the result is watertight and consistently oriented."""
-    return from_manifold(
-        manifold3d.Manifold.batch_boolean([to_manifold(m) for m in meshes], manifold3d.OpType.Add)
-    )
+    return from_manifold(manifold3d.Manifold.batch_boolean([to_manifold(m) for m in meshes], manifold3d.OpType.Add))
 
 
-def intersection_volume(
-    a: trimesh.Trimesh | manifold3d.Manifold, b: trimesh.Trimesh | manifold3d.Manifold
-) -> float:
+def intersection_volume(a: trimesh.Trimesh | manifold3d.Manifold, b: trimesh.Trimesh | manifold3d.Manifold) -> float:
     """Volume (m^3) of the overlap of two closed meshes: 0 when they only touch or are apart."""
     ma = a if isinstance(a, manifold3d.Manifold) else to_manifold(a)
     mb = b if isinstance(b, manifold3d.Manifold) else to_manifold(b)

@@ -114,16 +114,12 @@ def check_handle_clearance(obj: ArticulatedObject) -> list[str]:
         if h["type"] not in ("bar", "u"):
             continue
         if h["clearance"] < FINGER_SIZE[0] + 0.002:
-            problems.append(
-                f"{h['type']} handle on {h['link']} leaves {h['clearance'] * 1000:.1f} mm behind it"
-            )
+            problems.append(f"{h['type']} handle on {h['link']} leaves {h['clearance'] * 1000:.1f} mm behind it")
             continue
         axis = np.asarray(h["axis"], float)
         across = np.cross([1.0, 0.0, 0.0], axis)
         rot = np.stack([np.array([1.0, 0.0, 0.0]), axis, across], axis=1)
-        center = np.asarray(h["center"], float) - np.array(
-            [h["thickness"] / 2 + h["clearance"] / 2, 0.0, 0.0]
-        )
+        center = np.asarray(h["center"], float) - np.array([h["thickness"] / 2 + h["clearance"] / 2, 0.0, 0.0])
         import trimesh
 
         finger = trimesh.creation.box(extents=FINGER_SIZE)
@@ -150,9 +146,7 @@ def check_object(folder: Path) -> CheckReport:
         report.fail(f"moving part penetrates the body by {report.max_penetration_m3 * 1e6:.2f} cm^3")
     report.reached_fraction = check_reach(obj)
     if abs(report.reached_fraction - REACH_FRACTION) > REACH_TOL_FRACTION:
-        report.fail(
-            f"position control reached {report.reached_fraction:.2f} of the range, wanted {REACH_FRACTION}"
-        )
+        report.fail(f"position control reached {report.reached_fraction:.2f} of the range, wanted {REACH_FRACTION}")
     for problem in check_handle_clearance(obj):
         report.fail(problem)
     return report

@@ -96,9 +96,7 @@ def write_object(spec: ObjectSpec, folder: Path, object_id: str, generator_info:
         ET.SubElement(el, "parent", link=j.parent)
         ET.SubElement(el, "child", link=j.child)
         effort = 200.0 if j.type == "revolute" else 500.0
-        ET.SubElement(
-            el, "limit", lower=_fmt([j.lower]), upper=_fmt([j.upper]), effort=f"{effort:g}", velocity="2"
-        )
+        ET.SubElement(el, "limit", lower=_fmt([j.lower]), upper=_fmt([j.upper]), effort=f"{effort:g}", velocity="2")
         ET.SubElement(el, "dynamics", damping=f"{j.damping:g}", friction=f"{j.friction:g}")
     xml = minidom.parseString(ET.tostring(robot)).toprettyxml(indent="  ")
     (folder / "mobility.urdf").write_text(xml)
@@ -143,8 +141,7 @@ def _write_obj_with_colour(path: Path, mesh, rgba, material: str) -> None:
     """OBJ plus a one-material MTL (diffuse colour), so renderers that ignore URDF colours still show it."""
     r, g, b, a = (float(c) for c in rgba)
     path.with_suffix(".mtl").write_text(
-        f"newmtl {material}\nKa 0 0 0\nKd {r:.4f} {g:.4f} {b:.4f}\n"
-        f"Ks 0.1 0.1 0.1\nNs 20\nd {a:.4f}\nillum 2\n"
+        f"newmtl {material}\nKa 0 0 0\nKd {r:.4f} {g:.4f} {b:.4f}\nKs 0.1 0.1 0.1\nNs 20\nd {a:.4f}\nillum 2\n"
     )
     body = mesh.export(file_type="obj", include_normals=False, include_texture=False)
     path.write_text(f"mtllib {path.with_suffix('.mtl').name}\nusemtl {material}\n{body}")

@@ -44,9 +44,7 @@ def show_objects(cfg: ShowObjectsConfig) -> Path:
         qs = list(np.linspace(lo, hi, cfg.states))
         images = renderer.render_states(obj, qs)
         unit = "rad" if obj.joint_type == "revolute" else "m"
-        tiles.append(
-            [labelled(img, f"{obj.object_id}  q={q:.2f} {unit}") for img, q in zip(images, qs, strict=True)]
-        )
+        tiles.append([labelled(img, f"{obj.object_id}  q={q:.2f} {unit}") for img, q in zip(images, qs, strict=True)])
     rows = []
     for start in range(0, len(tiles), cfg.objects_per_row):
         rows.append([img for tile in tiles[start : start + cfg.objects_per_row] for img in tile])
