@@ -1,0 +1,1 @@
+"""SDF stage: signed-distance samples with nearest-grasp targets per (object, joint state)."""
