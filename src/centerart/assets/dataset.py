@@ -90,9 +90,9 @@ def _generate_one(job: tuple[str, int, int, str, bool, str]) -> dict:
                 if report is not None and not report.ok:
                     raise _Rejected("; ".join(report.problems))
                 record["triangles"] = _count_triangles(tmp)
-                record["seconds"] = round(time.perf_counter() - started, 3)
                 (tmp / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
-            return record
+            # Timing goes to the manifest only, so that object files are byte-identical for a seed.
+            return {**record, "seconds": round(time.perf_counter() - started, 3)}
         except _Rejected as rejection:
             rejections.append(str(rejection))
     raise CenterArtError(f"{oid}: no attempt out of {MAX_ATTEMPTS} passed the checks: {rejections[-3:]}")

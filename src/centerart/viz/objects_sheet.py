@@ -36,10 +36,11 @@ def show_objects(cfg: ShowObjectsConfig) -> Path:
     from centerart.viz.object_renderer import ObjectRenderer
 
     folders = list_objects(cfg.path)[: cfg.max_objects]
+    # Load (and so validate) every object before rendering anything: a bad folder fails fast, no partial sheet.
+    objects = [ArticulatedObject.load(folder) for folder in folders]
     renderer = ObjectRenderer(cfg.image_width, cfg.image_height)
     tiles = []
-    for folder in tqdm(folders, desc="render", unit="object"):
-        obj = ArticulatedObject.load(folder)
+    for obj in tqdm(objects, desc="render", unit="object"):
         lo, hi = obj.joint_range
         qs = list(np.linspace(lo, hi, cfg.states))
         images = renderer.render_states(obj, qs)
