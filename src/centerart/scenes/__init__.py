@@ -1,1 +1,0 @@
-"""scenes stage."""
