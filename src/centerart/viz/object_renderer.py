@@ -43,6 +43,20 @@ class ObjectRenderer:
         self._ground = [e for e in self.scene.entities if "ground" in e.name.lower()]
         self.camera = self.scene.add_camera("camera", width, height, self.fovy, 0.01, 20.0)
 
+    def _fit_distance(self, lo: np.ndarray, hi: np.ndarray, center: np.ndarray, back: np.ndarray) -> float:
+        """Smallest camera distance along ``back`` at which all 8 box corners are inside the image (+8% margin).
+
+        For a corner c (relative to the centre) the camera needs dist >= |lateral(c)| / tan(half fov) + depth(c).
+        """
+        pose = look_at_pose(back, np.zeros(3))
+        fwd, left, up = pose[:3, 0], pose[:3, 1], pose[:3, 2]
+        tan_v = np.tan(self.fovy / 2)
+        tan_h = tan_v * self.width / self.height
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        rel = corners - center
+        need = np.maximum(np.abs(rel @ left) / tan_h, np.abs(rel @ up) / tan_v) * 1.08 - rel @ fwd
+        return float(need.max())
+
     def render_states(
         self,
         obj: ArticulatedObject,
@@ -64,11 +78,10 @@ class ObjectRenderer:
             for e in self._ground:
                 e.set_pose(sapien.Pose([0, 0, lo[2] + 10.0 - 0.001]))
             center = (lo + hi) / 2
-            radius = 0.5 * np.linalg.norm(hi - lo)
-            dist = radius / np.sin(min(self.fovy, self.fovy * self.width / self.height) / 2) * 0.9
             az, el = np.deg2rad(azimuth_deg), np.deg2rad(elevation_deg)
-            eye = center + dist * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
-            self.camera.entity.set_pose(sapien.Pose(look_at_pose(eye, center)))
+            back = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+            dist = self._fit_distance(lo, hi, center, back)
+            self.camera.entity.set_pose(sapien.Pose(look_at_pose(center + dist * back, center)))
             images = []
             for q in states:
                 config = obj.configuration(q)
