@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from centerart.geometry.transforms import invert_pose, make_pose, transform_about_line
+from centerart.geometry.transforms import invert_pose, make_pose
 from centerart.grasps.gripper import (
     FINGER_LENGTH,
     FINGER_THICKNESS,
@@ -46,7 +46,7 @@ from centerart.grasps.gripper import (
     PALM_SIZE,
     hand_pose,
 )
-from centerart.grasps.sim_world import GraspTarget, pose_to_pb
+from centerart.grasps.sim_world import GraspTarget
 
 # --- the protocol's constants (printed in reports; EVALUATION.md) -------------------------------------------
 SUCCESS_ANGLE = 0.17  # rad a revolute joint must move in the commanded direction
@@ -66,6 +66,7 @@ PULL_DISTANCE = 0.10  # m commanded for prismatic joints
 PULL_MIN_RADIUS = 0.05  # m, floor on the TCP-to-hinge distance when turning PULL_SPEED into an angular speed
 APPROACH_TOLERANCE = 0.01  # m between the TCP and its goal after the approach
 SPAWN_PENETRATION_TOL = 0.0005  # m of contact depth tolerated at spawn (numerical contact noise)
+SETTLE_STEPS = 6  # steps after the approach for the constraint to settle on its goal
 PARK_POSITION = (0.0, 0.0, -50.0)  # m, where the gripper waits between trials (far below everything)
 
 ABORTS = ("collision_at_spawn", "approach_blocked", "no_contact", "lost_grip")
@@ -175,7 +176,7 @@ class PybulletGripper:
         """Teleport the hand (and its constraint goal) to ``world_T_hand`` with the given finger gap."""
         import pybullet as pb
 
-        pos, orn = pose_to_pb(world_T_hand)
+        pos, orn = world_T_hand[:3, 3].tolist(), quat_from_matrix(world_T_hand[:3, :3])
         pb.resetBasePositionAndOrientation(self.body, pos, orn, physicsClientId=self.client)
         pb.resetBaseVelocity(self.body, [0, 0, 0], [0, 0, 0], physicsClientId=self.client)
         for f in self.fingers:
@@ -187,11 +188,23 @@ class PybulletGripper:
         """Set the constraint goal: the hand is pulled towards ``world_T_hand`` with at most HAND_MAX_FORCE."""
         import pybullet as pb
 
-        pos, orn = pose_to_pb(world_T_hand)
+        pos, orn = world_T_hand[:3, 3].tolist(), list(quat_from_matrix(world_T_hand[:3, :3]))
         pb.changeConstraint(
             self.constraint,
             jointChildPivot=pos,
             jointChildFrameOrientation=orn,
+            maxForce=HAND_MAX_FORCE,
+            physicsClientId=self.client,
+        )
+
+    def move_to(self, position, quat_xyzw) -> None:
+        """:meth:`move` with a position (3,) and a quaternion (x, y, z, w): the per-step fast path."""
+        import pybullet as pb
+
+        pb.changeConstraint(
+            self.constraint,
+            jointChildPivot=list(position),
+            jointChildFrameOrientation=list(quat_xyzw),
             maxForce=HAND_MAX_FORCE,
             physicsClientId=self.client,
         )
@@ -214,9 +227,7 @@ class PybulletGripper:
         import pybullet as pb
 
         pos, orn = pb.getBasePositionAndOrientation(self.body, physicsClientId=self.client)
-        from scipy.spatial.transform import Rotation
-
-        return make_pose(Rotation.from_quat(orn).as_matrix(), pos)
+        return make_pose(np.reshape(pb.getMatrixFromQuaternion(orn), (3, 3)), pos)
 
     def opening(self) -> float:
         import pybullet as pb
@@ -295,15 +306,17 @@ class GraspExecutor:
         if any(p[8] < -SPAWN_PENETRATION_TOL for p in pb.getContactPoints(bodyA=gripper.body, physicsClientId=c)):
             return result(False, "collision_at_spawn", 0)
 
-        # 2. approach along the hand's own z
+        # 2. approach along the hand's own z (orientation fixed: one quaternion for the whole approach)
         steps = 0
         n_approach = max(1, int(np.ceil(APPROACH_DISTANCE / APPROACH_SPEED / self.dt)))
+        orn = quat_from_matrix(goal_hand[:3, :3])
+        z_axis, goal_pos = goal_hand[:3, 2], goal_hand[:3, 3]
         for k in range(1, n_approach + 1):
-            gripper.move(goal_hand @ make_pose(translation=[0.0, 0.0, -APPROACH_DISTANCE * (1 - k / n_approach)]))
+            gripper.move_to(goal_pos - z_axis * (APPROACH_DISTANCE * (1 - k / n_approach)), orn)
             pb.stepSimulation(physicsClientId=c)
-        for _ in range(6):  # let the constraint settle on the goal
+        for _ in range(SETTLE_STEPS):  # let the constraint settle on the goal
             pb.stepSimulation(physicsClientId=c)
-        steps += n_approach + 6
+        steps += n_approach + SETTLE_STEPS
         reached = gripper.world_T_hand()
         if np.linalg.norm(reached[:3, 3] - goal_hand[:3, 3]) > APPROACH_TOLERANCE:
             return result(False, "approach_blocked", steps)
@@ -330,13 +343,18 @@ class GraspExecutor:
             total, rate = PULL_DISTANCE, PULL_SPEED
         n_pull = max(1, int(np.ceil(total / rate / self.dt)))
         needed = success_threshold(target.joint_type)
+        hand_pos, hand_orn = grasped_hand[:3, 3], quat_from_matrix(grasped_hand[:3, :3])
         for k in range(1, n_pull + 1):
             amount = direction * total * k / n_pull
             if target.joint_type == "revolute":
-                motion = transform_about_line(origin, axis, angle=amount)
+                half = amount / 2
+                q_motion = (*(axis * np.sin(half)), np.cos(half))
+                rot = _rotation_matrix(axis, amount)
+                pos = origin + rot @ (hand_pos - origin)
+                orn = quat_multiply(q_motion, hand_orn)
             else:
-                motion = transform_about_line(origin, axis, shift=amount)
-            gripper.move(motion @ grasped_hand)
+                pos, orn = hand_pos + axis * amount, hand_orn
+            gripper.move_to(pos, orn)
             pb.stepSimulation(physicsClientId=c)
             steps += 1
             # Stop once clearly past the threshold (saves time); the grip is still checked below.
@@ -364,3 +382,47 @@ class GraspExecutor:
 def world_T_tcp_from_hand(world_T_hand: np.ndarray) -> np.ndarray:
     """Inverse of :func:`~centerart.grasps.gripper.hand_pose`."""
     return world_T_hand @ invert_pose(make_pose(translation=[0.0, 0.0, -HAND_TO_TCP]))
+
+
+def quat_from_matrix(rot: np.ndarray) -> tuple[float, float, float, float]:
+    """Quaternion (x, y, z, w) of a 3x3 rotation; plain arithmetic, because scipy's per-call overhead dominated
+    the trial time."""
+    m = rot
+    tr = m[0, 0] + m[1, 1] + m[2, 2]
+    if tr > 0:
+        s = 2.0 * np.sqrt(tr + 1.0)
+        return ((m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s)
+    if m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        return (0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s)
+    if m[1, 1] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        return ((m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s)
+    s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+    return ((m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s, (m[1, 0] - m[0, 1]) / s)
+
+
+def quat_multiply(a, b) -> tuple[float, float, float, float]:
+    """Hamilton product a * b of (x, y, z, w) quaternions (rotation b first, then a)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
+
+
+def _rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rodrigues' formula for a unit axis."""
+    x, y, z = axis
+    c, s = np.cos(angle), np.sin(angle)
+    C = 1.0 - c
+    return np.array(
+        [
+            [c + x * x * C, x * y * C - z * s, x * z * C + y * s],
+            [y * x * C + z * s, c + y * y * C, y * z * C - x * s],
+            [z * x * C - y * s, z * y * C + x * s, c + z * z * C],
+        ]
+    )
