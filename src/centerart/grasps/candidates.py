@@ -41,7 +41,7 @@ EDGE_REACH = 0.03  # m from the mid-thickness point to the edge it approaches
 EDGE_FREE_SPACE = 0.03  # m of free space the fingers need beyond the edge
 EDGE_DIRECTIONS = 12  # in-plane directions tried per surface point
 SURFACE_SAMPLES = 6000  # surface points per (object, state) to look for pinchable edges
-EDGE_DEPTH = (0.006, 0.022)  # m the TCP sits inside the edge
+EDGE_DEPTH = (0.004, 0.010)  # m the TCP sits inside the edge (pads 2 cm long: 1.4-2 cm of them overlap)
 #: Random rotation (degrees) about the TCP axes (x, y, z) for edge and handle candidates. Edges: tilting about
 #: y swings the approach within the part's plane, about x tilts it out of the plane, z rolls the fingers.
 EDGE_PERTURB_DEG = (20.0, 35.0, 20.0)
@@ -70,7 +70,9 @@ def moving_solid(obj: ArticulatedObject, q: float) -> trimesh.Trimesh:
     parts = [p.mesh for p in obj.parts(q, collision=True) if p.link in obj.moving_links]
     if not parts:
         parts = [p.mesh for p in obj.parts(q) if p.link in obj.moving_links]
-    hulls = [m.convex_hull for m in parts if len(m.vertices) >= 4]
+    with np.errstate(all="ignore"):  # flat PartNet pieces give degenerate hulls (zero volume): skipped below
+        hulls = [m.convex_hull for m in parts if len(m.vertices) >= 4]
+    hulls = [h for h in hulls if h.volume > 1e-9]
     try:
         return union(hulls)
     except ValueError:

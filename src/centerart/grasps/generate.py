@@ -37,7 +37,7 @@ from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng
 
 CANDIDATE_BATCH = 128
-PREFILTER_TOL = 0.001  # m of contact depth tolerated by the grasp-pose pre-filter (touching is fine)
+PREFILTER_TOL = 0.0005  # m of contact depth tolerated by the grasp-pose pre-filter (touching is fine)
 
 
 @dataclass

@@ -11,6 +11,10 @@ loads several objects plus room geometry into one world and reuses the same :cla
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,15 +95,16 @@ def load_object(
     pos, orn = pose_to_pb(world_T_object @ obj.canonical_T_base)
     urdf = obj.path / "mobility.urdf"
     try:
-        body = pb.loadURDF(
-            str(urdf),
-            basePosition=pos,
-            baseOrientation=orn,
-            useFixedBase=True,
-            globalScaling=obj.scale,
-            flags=pb.URDF_USE_INERTIA_FROM_FILE if obj.generated else 0,
-            physicsClientId=client,
-        )
+        with quiet_native_output():  # PartNet URDFs without inertials make pybullet print a warning per link
+            body = pb.loadURDF(
+                str(urdf),
+                basePosition=pos,
+                baseOrientation=orn,
+                useFixedBase=True,
+                globalScaling=obj.scale,
+                flags=pb.URDF_USE_INERTIA_FROM_FILE if obj.generated else 0,
+                physicsClientId=client,
+            )
     except pb.error as err:
         raise AssetError(urdf, f"pybullet cannot load it ({err})") from None
     config = obj.configuration(q)
@@ -144,15 +149,30 @@ def load_object(
     )
 
 
+@contextlib.contextmanager
+def quiet_native_output() -> Iterator[None]:
+    """Silence what native code writes to the process's stdout (file descriptor 1) inside the block."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def connect(gravity: float = 0.0, timestep: float = 1.0 / 240.0) -> int:
     """A new headless pybullet world (DIRECT). ``gravity`` in m/s^2 along -z.
 
     Label generation uses no gravity: a grasp is judged on whether it can move the part, not on whether gravity
     moves it (a bottom-hinged oven door would fall open by itself and count as a success).
     """
-    import pybullet as pb
+    with quiet_native_output():  # the first import prints the build time
+        import pybullet as pb
 
-    client = pb.connect(pb.DIRECT)
+        client = pb.connect(pb.DIRECT)
     pb.setGravity(0.0, 0.0, -gravity, physicsClientId=client)
     pb.setTimeStep(timestep, physicsClientId=client)
     return client
