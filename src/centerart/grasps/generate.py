@@ -79,7 +79,7 @@ def label_state(obj: ArticulatedObject, k: int, cfg: GenerateGraspsConfig) -> tu
     from centerart.grasps.sim_world import connect, load_object
 
     q = float(state_values(obj, cfg.states)[k])
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.process_time()
     rng = item_rng(cfg.seed, obj.object_id, k)
     client = connect()
     try:
@@ -149,6 +149,7 @@ def label_state(obj: ArticulatedObject, k: int, cfg: GenerateGraspsConfig) -> tu
         "approach_spread_deg": approach_spread_deg(approach),
         "seconds": round(time.perf_counter() - started, 3),
         "sim_seconds": round(sim_seconds, 3),
+        "cpu_seconds": round(time.process_time() - cpu_started, 3),
     }
     return labels, stats
 

@@ -5,7 +5,7 @@ along -z behind the palm, a cross bar at the palm face spanning the open stroke,
 the fingertips; the TCP (pad centre) sits between the fingers. Successful labels are green; with
 ``--failures`` some failed trials are drawn in red. Markers are visual-only actors in the SAPIEN scene of
 :class:`~centerart.viz.object_renderer.ObjectRenderer`, so they are shaded and occluded like the object.
-Rows: states; columns: two views (front-right and front-left).
+Rows: states; columns: the whole object from the front right, and a close-up on the drawn grasps.
 """
 
 from __future__ import annotations
@@ -120,19 +120,30 @@ def show_grasps(cfg: ShowGraspsConfig) -> Path:
         row = []
         unit = "rad" if labels.joint_type == "revolute" else "m"
         verb = "open" if labels.direction > 0 else "close"
-        for az in (35.0, -35.0):
-            a, el = np.deg2rad(az), np.deg2rad(22.0)
-            eye = center + dist * np.array([np.cos(el) * np.cos(a), np.cos(el) * np.sin(a), np.sin(el)])
-            renderer.camera.entity.set_pose(sapien.Pose(look_at_pose(eye, center)))
+        drawn = labels.poses[_pick(labels.count, cfg.grasps)]
+        views = [(center, dist, 35.0, 22.0, "")]
+        if len(drawn):
+            # Close-up: centred on the drawn TCPs, seen from the side of their mean approach direction.
+            tcps = drawn[:, :3, 3]
+            mean_dir = -drawn[:, :3, 2].mean(0)
+            az = float(np.degrees(np.arctan2(mean_dir[1], mean_dir[0]))) + 40.0
+            span = float(np.linalg.norm(tcps.max(0) - tcps.min(0))) / 2 + 0.15
+            views.append((tcps.mean(0), span / np.sin(fov / 2), az, 25.0, " (close-up)"))
+        for view_center, view_dist, az_deg, el_deg, suffix in views:
+            a, el = np.deg2rad(az_deg), np.deg2rad(el_deg)
+            eye = view_center + view_dist * np.array([np.cos(el) * np.cos(a), np.cos(el) * np.sin(a), np.sin(el)])
+            renderer.camera.entity.set_pose(sapien.Pose(look_at_pose(eye, view_center)))
             scene.update_render()
             renderer.camera.take_picture()
             rgba = renderer.camera.get_picture("Color")
             img = (np.clip(rgba[..., :3], 0, 1) * 255).astype(np.uint8)
             text = (
                 f"{obj.object_id} state {labels.state_index} q={labels.q:.2f} {unit} ({verb}): "
-                f"{labels.count} labels, {min(labels.count, cfg.grasps)} drawn"
+                f"{labels.count} labels, {len(drawn)} drawn{suffix}"
             )
             row.append(labelled(img, text))
+        while len(row) < 2:
+            row.append(np.full_like(row[0], 255))
         rows.append(row)
         for actor in actors:
             scene.remove_actor(actor)
