@@ -8,7 +8,8 @@
 2. ``generation``: ``centerart grasps generate`` on ``objects-per-category`` generated objects per category (seed
    0) x ``states`` states, capped at ``per-state`` labels per (object, state); per category: yield (successes /
    executed trials), (object, state) items reaching 100 labels, successful labels per item per CPU minute
-   (one core, so the figure does not depend on other load on the machine), trials per second of simulation time, and the approach-direction spread (mean angle to the mean
+   (one core, so the figure does not depend on other load on the machine), trials per second of simulation
+   time, and the approach-direction spread (mean angle to the mean
    approach of a state, degrees). Items already in ``--work`` are reused (the run is resumable); their
    timings are those of the run that made them.
 """

@@ -87,7 +87,7 @@ def test_spawn_collision_aborts(objects_dir, known_ids):
     obj = ArticulatedObject.load(objects_dir / known_ids["door_bar"])
     q = obj.joint_range[0]
     client, target, executor, pb = _world(obj, q)
-    # Approach straight down so that the spawn pose (0.1 m back) puts the TCP 5 mm and the fingertips 10 mm into the top panel.
+    # Approach straight down: the spawn pose (0.1 m back) puts the TCP 5 mm, the fingertips 10 mm into the top.
     top = obj.bounds(q)[1, 2]
     down = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]).T
     grasp = make_pose(down, [-0.1, 0.0, top - 0.105])
