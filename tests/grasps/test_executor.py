@@ -112,3 +112,26 @@ def test_trials_are_deterministic(objects_dir, known_ids):
     a, b = executor.execute(grasp, target), executor.execute(grasp, target)
     assert a == b
     pb.disconnect(client)
+
+
+def test_pybullet_gripper_matches_the_gripper_geometry():
+    """The simulated fingers sit where gripper.gripper_boxes says (guards the base-at-inertial-origin gotcha)."""
+    import pybullet as pb
+
+    from centerart.geometry.transforms import rotation_about_axis
+    from centerart.grasps.gripper import gripper_boxes, hand_pose
+
+    client = connect()
+    executor = ex.GraspExecutor(client)
+    tcp = make_pose(rotation_about_axis([0.3, -0.5, 0.8], 1.1), [0.2, -0.1, 0.4])
+    for opening in (0.08, 0.03):
+        executor.gripper.place(hand_pose(tcp), opening)
+        base = pb.getBasePositionAndOrientation(executor.gripper.body, physicsClientId=client)[0]
+        np.testing.assert_allclose(base, hand_pose(tcp)[:3, 3], atol=1e-6)
+        for finger, (_, tcp_T_box) in zip(executor.gripper.fingers, gripper_boxes(opening)[1:], strict=True):
+            state = pb.getLinkState(executor.gripper.body, finger, physicsClientId=client)
+            aabb_lo, aabb_hi = pb.getAABB(executor.gripper.body, finger, physicsClientId=client)
+            centre = (np.asarray(aabb_lo) + np.asarray(aabb_hi)) / 2
+            np.testing.assert_allclose(centre, (tcp @ tcp_T_box)[:3, 3], atol=2e-3)
+            assert state is not None
+    pb.disconnect(client)
