@@ -36,7 +36,7 @@ from centerart.geometry.transforms import make_pose
 from centerart.grasps.gripper import FINGER_THICKNESS, FINGER_WIDTH, FLIP_Z, MAX_OPENING
 
 MAX_PINCH_THICKNESS = MAX_OPENING - 0.012  # m: leave 6 mm of finger travel on each side
-MIN_PINCH_THICKNESS = 0.002  # m: thinner than this is a ray artefact
+MIN_PINCH_THICKNESS = 0.0003  # m: thinner is a ray artefact (PartNet doors can be 0.6 mm panels)
 EDGE_REACH = 0.03  # m from the mid-thickness point to the edge it approaches
 EDGE_FREE_SPACE = 0.03  # m of free space the fingers need beyond the edge
 EDGE_DIRECTIONS = 12  # in-plane directions tried per surface point
@@ -64,15 +64,20 @@ class EdgeSites:
         return len(self.edge_points)
 
 
-def moving_solid(obj: ArticulatedObject, q: float) -> trimesh.Trimesh:
-    """The moving part as pybullet simulates it: union of the convex hulls of its collision elements (canonical
-    frame). Falls back to visual parts when the URDF has no collision elements on the moving links."""
+def moving_pieces(obj: ArticulatedObject, q: float) -> list[trimesh.Trimesh]:
+    """Convex hulls of the moving links' collision elements (visual parts if there are none), canonical frame:
+    what pybullet simulates, since it convex-hulls the meshes of moving links."""
     parts = [p.mesh for p in obj.parts(q, collision=True) if p.link in obj.moving_links]
     if not parts:
         parts = [p.mesh for p in obj.parts(q) if p.link in obj.moving_links]
     with np.errstate(all="ignore"):  # flat PartNet pieces give degenerate hulls (zero volume): skipped below
         hulls = [m.convex_hull for m in parts if len(m.vertices) >= 4]
-    hulls = [h for h in hulls if h.volume > 1e-9]
+    return [h for h in hulls if h.volume > 1e-9]
+
+
+def moving_solid(obj: ArticulatedObject, q: float, pieces: list[trimesh.Trimesh] | None = None) -> trimesh.Trimesh:
+    """The moving part as pybullet simulates it: the union of :func:`moving_pieces` (canonical frame)."""
+    hulls = moving_pieces(obj, q) if pieces is None else pieces
     try:
         return union(hulls)
     except ValueError:
@@ -90,10 +95,28 @@ def _first_hits(mesh: trimesh.Trimesh, origins: np.ndarray, dirs: np.ndarray) ->
     return out
 
 
-def find_edge_sites(solid: trimesh.Trimesh, rng: np.random.Generator, samples: int = SURFACE_SAMPLES) -> EdgeSites:
-    """Pinchable edges of ``solid`` (a closed, outward-oriented mesh); see the module docstring."""
-    pts, faces = trimesh.sample.sample_surface(solid, samples, seed=int(rng.integers(2**31)))
-    normals = solid.face_normals[faces]
+def find_edge_sites(
+    solid: trimesh.Trimesh,
+    rng: np.random.Generator,
+    samples: int = SURFACE_SAMPLES,
+    pieces: list[trimesh.Trimesh] | None = None,
+) -> EdgeSites:
+    """Pinchable edges of ``solid`` (a closed, outward-oriented mesh); see the module docstring.
+
+    Surface points are drawn area-weighted over ``solid``, or, when ``pieces`` are given, in equal numbers from
+    each piece (keeping those on the outside of ``solid``), so that a small handle is not drowned by a big door.
+    """
+    if pieces:
+        per_piece = max(samples // len(pieces), 300)
+        chunks = [trimesh.sample.sample_surface(m, per_piece, seed=int(rng.integers(2**31))) for m in pieces]
+        pts = np.concatenate([c[0] for c in chunks])
+        normals = np.concatenate([m.face_normals[c[1]] for m, c in zip(pieces, chunks, strict=True)])
+        if solid.is_watertight:
+            outside = ~solid.contains(pts + normals * 1e-3)
+            pts, normals = pts[outside], normals[outside]
+    else:
+        pts, faces = trimesh.sample.sample_surface(solid, samples, seed=int(rng.integers(2**31)))
+        normals = solid.face_normals[faces]
     eps = 1e-4
     t = _first_hits(solid, pts - eps * normals, -normals)
     ok = (t > MIN_PINCH_THICKNESS) & (t < MAX_PINCH_THICKNESS)
@@ -145,7 +168,10 @@ class CandidateSampler:
         for h in obj.meta.get("handles", []) if obj.generated else []:
             if h["link"] in obj.moving_links and h["type"] in ("bar", "u", "knob", "lip"):
                 self.handles.append((h, poses[h["link"]]))
-        self.sites = find_edge_sites(moving_solid(obj, q), rng)
+        pieces = moving_pieces(obj, q)
+        # Real objects have no handle annotation: sample every collision piece equally so that handles (small
+        # pieces) get candidates. Generated objects keep area-weighted sampling; their handles come from meta.
+        self.sites = find_edge_sites(moving_solid(obj, q, pieces), rng, pieces=None if obj.generated else pieces)
 
     def sample(self, n: int) -> tuple[np.ndarray, list[str]]:
         """``n`` candidate TCP poses (n, 4, 4) and their sources ("bar", "u", "knob", "lip", "edge")."""
