@@ -57,6 +57,33 @@ def _objects_show_run():
     return lambda cfg: print(f"wrote {show_objects(cfg)}")
 
 
+def _sdf_generate():
+    from centerart.sdf.generate import GenerateSdfConfig
+
+    return GenerateSdfConfig
+
+
+def _sdf_generate_run():
+    from centerart.sdf.generate import generate_sdf
+
+    def run(cfg):
+        summary = generate_sdf(cfg)
+        c = summary["counts"]
+        print(
+            f"{c['objects']} objects, {c['states']} states, {c['points']} points "
+            f"({c['states_without_grasps']} states without grasps)"
+        )
+        for oid, o in summary["objects"].items():
+            flag = "" if o["meets_min_sign_agreement"] else f"  BELOW {summary['min_sign_agreement']:.0%}"
+            print(
+                f"  {oid:28s} sign agreement {o['sign_agreement_min']:.4f} (min), "
+                f"{o['sign_method']} vs {o['check_method']}{flag}"
+            )
+        print(f"wrote {Path(cfg.out) / 'manifest.json'}")
+
+    return run
+
+
 def _demo():
     from centerart.demo import DemoConfig
 
@@ -77,6 +104,11 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "generate procedural articulated objects (PartNet-Mobility layout)",
         ),
         "show": Command(_objects_show, _objects_show_run, "contact sheet of objects at closed/half/open states"),
+    },
+    "sdf": {
+        "generate": Command(
+            _sdf_generate, _sdf_generate_run, "SDF samples + nearest-grasp targets per (object, joint state)"
+        ),
     },
     "demo": {"": Command(_demo, _demo_run, "the main job on its built-in default (see README quick start)")},
 }
