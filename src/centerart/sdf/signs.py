@@ -164,9 +164,8 @@ def flood_fill_inside(
     seed: int = 0,
 ) -> np.ndarray:
     """Inside (bool per point) by exterior flood fill on a grid over [lo, hi] with ``cells`` voxels along its
-    longest side. Band points walk from their nearest surface point away from it, up to 6 voxels, and take the
-    label of the first empty voxel (none found: outside, as for a point between the two faces of a wall thinner
-    than the band)."""
+    longest side. Band points walk from their nearest surface point away from it and take the label of the first
+    empty voxel; points whose walk stays in the band take the label of the empty voxel nearest to them."""
     fill = FloodFill.build(mesh, lo, hi, cells, grow, seed)
     points = np.asarray(points, float)
     inside, decided = fill.classify(points)
@@ -187,5 +186,12 @@ def flood_fill_inside(
             which = np.flatnonzero(todo)[probe_decided]
             label[which] = probe_inside[probe_decided]
             todo[which] = False
+        if todo.any():
+            # Stuck in the band (e.g. inside near an edge, where walking off one face runs along the other): take
+            # the label of the empty voxel nearest to the point's own voxel.
+            _, nearest = ndimage.distance_transform_edt(fill.wall, return_distances=True, return_indices=True)
+            i = fill.index(p[todo])
+            j = tuple(nearest[axis][i] for axis in range(3))
+            label[todo] = ~fill.outside[j] & ~fill.wall[j]
         inside[band] = label
     return inside
