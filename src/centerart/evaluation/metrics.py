@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import open3d as o3d
 import trimesh
 from scipy.spatial import cKDTree
 
@@ -56,23 +57,40 @@ def shape_metrics(
     threshold_m: float = FSCORE_THRESHOLD_M,
     seed: int = 0,
 ) -> ShapeMetrics:
-    """Chamfer-L1 (mm) and F-score of ``predicted`` against ``truth``, ``samples`` surface points each."""
+    """Chamfer-L1 (mm) and F-score of ``predicted`` against ``truth``: ``samples`` surface points of each mesh,
+    each measured to the other *surface* (exact point-to-triangle distance, open3d), so that the number is the
+    shapes' difference and not the gap between two point samplings (about 2 mm for 30k points on 0.5 m^2)."""
     p = surface_samples(predicted, samples, seed)
-    t = surface_samples(truth, samples, seed + 1)
-    return shape_metrics_points(p, t, threshold_m)
+    t = surface_samples(truth, samples, seed)
+    d_pt = _distance_to_surface(truth, p)  # accuracy: predicted points to the true surface
+    d_tp = _distance_to_surface(predicted, t)  # completeness: true points to the predicted surface
+    return _from_distances(d_pt, d_tp, threshold_m)
+
+
+def _distance_to_surface(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(
+        o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)), o3d.core.Tensor(np.asarray(mesh.faces, np.uint32))
+    )
+    return scene.compute_distance(o3d.core.Tensor(np.asarray(points, np.float32))).numpy().astype(float)
+
+
+def _from_distances(d_pt: np.ndarray, d_tp: np.ndarray, threshold_m: float) -> ShapeMetrics:
+    chamfer = 0.5 * (d_pt.mean() + d_tp.mean())
+    precision = float(np.mean(d_pt < threshold_m))
+    recall = float(np.mean(d_tp < threshold_m))
+    fscore = 0.0 if precision + recall == 0 else 2 * precision * recall / (precision + recall)
+    return ShapeMetrics(1000.0 * float(chamfer), fscore, precision, recall, threshold_m, len(d_pt))
 
 
 def shape_metrics_points(
     predicted: np.ndarray, truth: np.ndarray, threshold_m: float = FSCORE_THRESHOLD_M
 ) -> ShapeMetrics:
-    """As :func:`shape_metrics` on given surface samples (N, 3) and (M, 3)."""
-    d_pt, _ = cKDTree(truth).query(predicted, k=1)  # each predicted point to the truth: accuracy
-    d_tp, _ = cKDTree(predicted).query(truth, k=1)  # each true point to the prediction: completeness
-    chamfer = 0.5 * (d_pt.mean() + d_tp.mean())
-    precision = float(np.mean(d_pt < threshold_m))
-    recall = float(np.mean(d_tp < threshold_m))
-    fscore = 0.0 if precision + recall == 0 else 2 * precision * recall / (precision + recall)
-    return ShapeMetrics(1000.0 * float(chamfer), fscore, precision, recall, threshold_m, len(predicted))
+    """As :func:`shape_metrics` on point sets (N, 3) and (M, 3), point to nearest point (for clouds without a
+    mesh, e.g. a partial depth scan); includes the sampling gap."""
+    d_pt, _ = cKDTree(truth).query(predicted, k=1)
+    d_tp, _ = cKDTree(predicted).query(truth, k=1)
+    return _from_distances(np.asarray(d_pt), np.asarray(d_tp), threshold_m)
 
 
 def chamfer_l1_mm(predicted: trimesh.Trimesh, truth: trimesh.Trimesh, samples: int = CHAMFER_SAMPLES, seed: int = 0):
