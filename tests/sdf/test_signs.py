@@ -26,8 +26,8 @@ def box_sdf(p: np.ndarray, half: np.ndarray = HALF) -> np.ndarray:
 def test_box_sdf_matches_closed_form():
     box = trimesh.creation.box(extents=2 * HALF)
     rng = np.random.default_rng(0)
-    cfg = SamplingConfig(points=20_000, check_points=2_000)
-    pts = sample_points(box, cfg, rng)
+    cfg = SamplingConfig(check_points=2_000)
+    pts = sample_points(box, 20_000, cfg, rng)
     res = signed_distance(box, True, pts, cfg, rng)
     assert res.points.shape == (20_000, 3) and res.sdf.dtype == np.float32
     np.testing.assert_allclose(res.sdf, box_sdf(res.points.astype(float)), atol=1e-5)
@@ -65,8 +65,8 @@ def test_soup_of_double_sided_box_signs_like_a_solid():
     clean = dedupe_soup(soup)
     assert len(clean.faces) == 12
     rng = np.random.default_rng(2)
-    cfg = SamplingConfig(points=20_000, check_points=5_000, soup_shell=0.002)
-    pts = sample_points(clean, cfg, rng)
+    cfg = SamplingConfig(check_points=5_000, soup_shell=0.002)
+    pts = sample_points(clean, 20_000, cfg, rng)
     res = signed_distance(clean, False, pts, cfg, rng)
     truth = box_sdf(res.points.astype(float)) - 0.002
     decided = np.abs(truth) > 0.001

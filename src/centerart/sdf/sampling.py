@@ -1,6 +1,6 @@
 """Query points and their signed distances for one (object, joint state), canonical frame, metres.
 
-Point mix (fractions of ``SamplingConfig.points``), each set drawn around area-weighted surface samples:
+Point mix (fractions of the point count), each set drawn around area-weighted surface samples:
 
 - ``near`` (default 45%): surface + N(0, 5 mm). Puts most of the budget where the zero level set must be
   accurate: reconstruction is judged by Chamfer distance at the millimetre level and DeepSDF's clamped loss only
@@ -37,12 +37,12 @@ from centerart.sdf.signs import (
 class SamplingConfig:
     """How query points are drawn and signed (see the module docstring for why)."""
 
-    points: int = 100_000
-    """Query points per (object, state)."""
     near_fraction: float = 0.45
+    """Share of points at surface + N(0, near_sigma)."""
     near_sigma: float = 0.005
     """m, standard deviation of the near-surface noise."""
     far_fraction: float = 0.35
+    """Share of points at surface + N(0, far_sigma); the rest is uniform in the padded bounds."""
     far_sigma: float = 0.03
     """m, standard deviation of the wider band."""
     padding: float = 0.05
@@ -70,11 +70,12 @@ class SignedSamples:
     check_method: str
 
 
-def sample_points(mesh: trimesh.Trimesh, cfg: SamplingConfig, rng: np.random.Generator) -> np.ndarray:
-    """Query points (N, 3) around ``mesh``; deterministic given ``rng``."""
-    n_near = round(cfg.points * cfg.near_fraction)
-    n_far = round(cfg.points * cfg.far_fraction)
-    n_uniform = cfg.points - n_near - n_far
+def sample_points(mesh: trimesh.Trimesh, count: int, cfg: SamplingConfig, rng: np.random.Generator) -> np.ndarray:
+    """``count`` query points (count, 3) around ``mesh``, near set first, then far, then uniform; deterministic
+    given ``rng``."""
+    n_near = round(count * cfg.near_fraction)
+    n_far = round(count * cfg.far_fraction)
+    n_uniform = count - n_near - n_far
     if min(n_near, n_far, n_uniform) < 0:
         raise ValueError("near_fraction + far_fraction must be <= 1")
     surface, _ = trimesh.sample.sample_surface(mesh, n_near + n_far, seed=int(rng.integers(2**31)))
