@@ -49,9 +49,9 @@ class SamplingConfig:
     """m added on every side of the object's bounds for the uniform points."""
     parity_rays: int = 5
     """Rays voting on ray parity (closed meshes; odd)."""
-    escape_rays: int = 64
+    escape_rays: int = 256
     """Rays of the escape test (soups' check)."""
-    flood_cells: int = 192
+    flood_cells: int = 256
     """Voxels along the longest side of the flood-fill grid (soups' sign)."""
     soup_shell: float = 0.002
     """m, half-thickness given to triangle soups (0 for closed meshes)."""

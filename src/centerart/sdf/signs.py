@@ -153,6 +153,11 @@ class FloodFill:
         return decided & ~self.outside[i], decided
 
 
+_R = np.arange(-5, 6)
+_OFFSETS = np.stack(np.meshgrid(_R, _R, _R, indexing="ij"), axis=-1).reshape(-1, 3)
+_OFFSETS = _OFFSETS[np.argsort(np.linalg.norm(_OFFSETS, axis=1), kind="stable")]
+
+
 def flood_fill_inside(
     mesh: trimesh.Trimesh,
     scene: o3d.t.geometry.RaycastingScene,
@@ -188,10 +193,18 @@ def flood_fill_inside(
             todo[which] = False
         if todo.any():
             # Stuck in the band (e.g. inside near an edge, where walking off one face runs along the other): take
-            # the label of the empty voxel nearest to the point's own voxel.
-            _, nearest = ndimage.distance_transform_edt(fill.wall, return_distances=True, return_indices=True)
-            i = fill.index(p[todo])
-            j = tuple(nearest[axis][i] for axis in range(3))
-            label[todo] = ~fill.outside[j] & ~fill.wall[j]
+            # the label of the empty voxel nearest to the point's own voxel, searched outwards up to 5 voxels.
+            stuck = np.flatnonzero(todo)
+            base = np.stack(fill.index(p[stuck]), axis=1)
+            shape = np.array(fill.wall.shape)
+            for offset in _OFFSETS:
+                cell = np.clip(base + offset, 0, shape - 1)
+                empty = ~fill.wall[cell[:, 0], cell[:, 1], cell[:, 2]]
+                if empty.any():
+                    hit = cell[empty]
+                    label[stuck[empty]] = ~fill.outside[hit[:, 0], hit[:, 1], hit[:, 2]]
+                    stuck, base = stuck[~empty], base[~empty]
+                    if not len(stuck):
+                        break
         inside[band] = label
     return inside
