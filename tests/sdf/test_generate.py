@@ -145,7 +145,7 @@ def test_real_partnet_samples(tmp_path):
     assert summary["counts"]["states"] == 4
     for oid in ids:
         o = summary["objects"][oid]
-        assert o["sign_method"] == "flood_fill" and o["check_method"] == "ray_escape"
+        assert o["sign_method"] == "ray_escape" and o["check_method"] == "flood_fill"
         assert o["sign_agreement_min"] >= REAL_AGREEMENT_FLOOR, o
         s = SdfSamples.load(sample_path(cfg.out, oid, 0))
         assert 0.05 < (s.sdf < 0).mean() < 0.9 and np.isfinite(s.sdf).all()

@@ -50,14 +50,14 @@ class SamplingConfig:
     parity_rays: int = 5
     """Rays voting on ray parity (closed meshes; odd)."""
     escape_rays: int = 256
-    """Rays of the escape test (soups' check)."""
+    """Rays of the escape test (soups' sign)."""
     flood_cells: int = 256
-    """Voxels along the longest side of the flood-fill grid (soups' sign)."""
+    """Voxels along the longest side of the flood-fill grid (soups' check)."""
     soup_shell: float = 0.002
     """m, half-thickness given to triangle soups (0 for closed meshes)."""
     check_points: int = 10_000
-    """Points (a seeded subsample) on which the second sign method is run; winding numbers cost O(points x
-    triangles)."""
+    """Points (a seeded subsample) on which the second sign method is run (winding numbers cost O(points x
+    triangles)); 10k points give the agreement to about +-0.2%."""
 
 
 @dataclass
@@ -99,11 +99,11 @@ def signed_distance(
         check_inside = winding_number(mesh, points[check_idx]) > 0.5
         shell, methods = 0.0, ("ray_parity", "winding_number")
     else:
+        inside = ray_escape_inside(scene, points, cfg.escape_rays)
         lo = np.minimum(mesh.bounds[0], points.min(0)) - cfg.padding
         hi = np.maximum(mesh.bounds[1], points.max(0)) + cfg.padding
-        inside = flood_fill_inside(mesh, scene, points, lo, hi, cfg.flood_cells)
-        check_inside = ray_escape_inside(scene, points[check_idx], cfg.escape_rays)
-        shell, methods = cfg.soup_shell, ("flood_fill", "ray_escape")
+        check_inside = flood_fill_inside(mesh, scene, points[check_idx], lo, hi, cfg.flood_cells)
+        shell, methods = cfg.soup_shell, ("ray_escape", "flood_fill")
     sdf = np.where(inside, -dist, dist) - shell
     # Agreement on the sign of the final field: within the shell both methods give a negative value.
     check_sdf = np.where(check_inside, -dist[check_idx], dist[check_idx]) - shell

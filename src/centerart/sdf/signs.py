@@ -13,13 +13,15 @@ useless there: on the sample objects the seeded rays of one point disagree for 2
 single open sheet flips parity. Winding numbers need an orientation the soups lack (their double-sided walls
 give 0 everywhere). So:
 
-- sign: :func:`flood_fill_inside`, empty space the flood from the grid border cannot reach is inside; points in
+- sign: :func:`ray_escape_inside`, a point is outside when at least one of many evenly spread rays leaves the
+  scene without a hit, i.e. when it can be seen from outside: the visibility convention of DeepSDF-style data
+  (depth scans from a sphere of cameras) on exact geometry, so closed boards thinner than any voxel stay solid.
+  The SDF gives every sheet a thin shell (see :mod:`centerart.sdf.sampling`), so open sheets have an inside too.
+- check: :func:`flood_fill_inside`, empty space the flood from the grid border cannot reach is inside; points in
   the voxel band around the surface take the label of the first empty voxel found by walking away from their
-  nearest surface point (a point just outside a wall walks outwards, one inside walks inwards). The SDF then
-  gives every sheet a thin shell (see :mod:`centerart.sdf.sampling`), so open sheets have an inside too.
-- check: :func:`ray_escape_inside`, a point is outside when at least one of many seeded rays leaves the scene
-  without hitting anything. Exact geometry, no voxels, no connectivity. The two disagree where a soup is
-  ambiguous: sheltered pockets (escape: inside, flood: outside) and shells with holes wider than a voxel.
+  nearest surface point. Voxels and connectivity, no rays. The two disagree where a soup is ambiguous: bodies
+  whose gaps are wider than the flood's closing but let few straight rays through (flood: outside, escape:
+  inside), sheltered pockets reached by a bent path only, and boards thinner than the voxel band.
 """
 
 from __future__ import annotations
@@ -78,15 +80,23 @@ def ray_parity_inside(
 
 
 def ray_escape_inside(
-    scene: o3d.t.geometry.RaycastingScene, points: np.ndarray, rays: int = 64, seed: int = 1, chunk: int = 20_000
+    scene: o3d.t.geometry.RaycastingScene, points: np.ndarray, rays: int = 256, seed: int = 1, chunk: int = 20_000
 ) -> np.ndarray:
-    """Inside (bool per point) unless one of ``rays`` evenly spread rays leaves without a hit. For soups."""
+    """Inside (bool per point) unless one of ``rays`` evenly spread rays leaves without a hit. For soups.
+
+    Most outside points escape along one of the first few directions, so every point first tries a spread
+    subset of 32 rays and only the points still enclosed try the rest."""
     dirs = ray_directions(rays, seed).astype(np.float32)
+    first, rest = dirs[:: max(1, rays // 32)], np.delete(dirs, np.arange(0, rays, max(1, rays // 32)), axis=0)
     points = np.asarray(points, np.float32)
     inside = np.zeros(len(points), bool)
     for s in range(0, len(points), chunk):
-        blocked = scene.test_occlusions(_ray_tensor(points[s : s + chunk], dirs)).numpy()
-        inside[s : s + chunk] = blocked.all(axis=1)
+        p = points[s : s + chunk]
+        enclosed = scene.test_occlusions(_ray_tensor(p, first)).numpy().all(axis=1)
+        if len(rest) and enclosed.any():
+            idx = np.flatnonzero(enclosed)
+            enclosed[idx] = scene.test_occlusions(_ray_tensor(p[idx], rest)).numpy().all(axis=1)
+        inside[s : s + chunk] = enclosed
     return inside
 
 
