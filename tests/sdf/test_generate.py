@@ -11,6 +11,7 @@ import pytest
 
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.cli import main
+from centerart.errors import CenterArtError
 from centerart.grasps.gripper import control_points
 from centerart.sdf.generate import GenerateSdfConfig, generate_sdf
 from centerart.sdf.samples import SdfSamples, list_sample_files, sample_path
@@ -114,6 +115,26 @@ def test_cli_errors_on_missing_folders(tmp_path, capsys, generated_objects):
     )
     assert "no object folders" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_resume_with_other_settings_is_refused(dataset):
+    cfg = dataset[0]
+    with pytest.raises(CenterArtError, match="other settings"):
+        generate_sdf(replace(cfg, points=9000, workers=1), progress=False)
+
+
+def test_broken_object_in_a_worker_gives_one_clear_error(tmp_path, capsys, generated_objects):
+    objects = tmp_path / "objects"
+    objects.mkdir()
+    for p in sorted(generated_objects.iterdir()):
+        if p.is_dir():
+            (objects / p.name).symlink_to(p)
+    (objects / "broken").mkdir()
+    (objects / "broken" / "mobility.urdf").write_text("<robot name='x'><link name='a'/>")
+    args = ["--objects", str(objects), "--grasps", str(tmp_path), "--out", str(tmp_path / "o")]
+    assert main(["sdf", "generate", *args, "--points", "300", "--states", "1", "--workers", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "broken/mobility.urdf" in err and "malformed URDF" in err and "Traceback" not in err
 
 
 def test_cli_rejects_corrupt_label_file(tmp_path, capsys, generated_objects):

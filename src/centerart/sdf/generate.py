@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -114,14 +114,37 @@ def _stats_path(out: Path, object_id: str, state_index: int) -> Path:
     return sample_path(out, object_id, state_index).with_suffix(".json")
 
 
+def _fingerprint(item: _Item) -> dict:
+    return {"seed": item.seed, "points": item.points, "sampling": asdict(item.sampling)}
+
+
 def _generate_one(item: _Item) -> dict:
+    try:
+        return _generate_one_unchecked(item)
+    except CenterArtError as err:
+        # Re-raise as the base class: AssetError's two-argument constructor does not survive the trip back from
+        # a worker process (pickle rebuilds exceptions from their message alone).
+        raise CenterArtError(str(err)) from None
+    except (ValueError, RuntimeError, MemoryError) as err:
+        raise CenterArtError(
+            f"{item.object_dir} state {item.state_index}: SDF sampling failed ({type(err).__name__}: {err})"
+        ) from None
+
+
+def _generate_one_unchecked(item: _Item) -> dict:
     out = Path(item.out)
     npz, stats_file = (
         sample_path(out, item.object_id, item.state_index),
         _stats_path(out, item.object_id, item.state_index),
     )
     if npz.is_file() and stats_file.is_file():
-        return {**json.loads(stats_file.read_text()), "resumed": True}
+        stats = json.loads(stats_file.read_text())
+        if stats.get("config") != _fingerprint(item):
+            raise CenterArtError(
+                f"{npz}: was made with other settings ({stats.get('config')}); "
+                "use a new --out or the same options to resume"
+            )
+        return {**stats, "resumed": True}
     started = time.perf_counter()
     obj = ArticulatedObject.load(item.object_dir)
     if item.label_file is not None:
@@ -172,6 +195,7 @@ def _generate_one(item: _Item) -> dict:
         "grasps": len(poses),
         "seconds_sdf": round(t_sdf, 3),
         "seconds_grasp_targets": round(t_grasp, 4),
+        "config": _fingerprint(item),
     }
     atomic_write_json(stats_file, stats)  # written last: its presence marks the item finished
     return stats
@@ -209,10 +233,12 @@ def generate_sdf(cfg: GenerateSdfConfig, progress: bool = True) -> dict:
         "states": len(rows),
         "points": int(sum(r["points"] for r in rows)),
         "states_without_grasps": sum(r["grasps"] == 0 for r in rows),
+        "resumed": sum(bool(r.get("resumed")) for r in rows),
         "objects_below_min_sign_agreement": sorted(
             k for k, o in per_object.items() if not o["meets_min_sign_agreement"]
         ),
     }
     summary = {"seed": cfg.seed, "min_sign_agreement": MIN_SIGN_AGREEMENT, "counts": counts, "objects": per_object}
+    rows = [{k: v for k, v in r.items() if k != "config"} for r in rows]
     write_manifest(out, "sdf", cfg, **summary, states=rows)
     return summary
