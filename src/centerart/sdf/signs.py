@@ -45,8 +45,6 @@ def raycasting_scene(mesh: trimesh.Trimesh) -> o3d.t.geometry.RaycastingScene:
 def ray_directions(count: int, seed: int = 0) -> np.ndarray:
     """``count`` fixed unit directions (count, 3), never along a coordinate axis in practice (generated objects
     are axis-aligned boxes: an axis-aligned ray can run inside a face or hit an edge exactly)."""
-    if count == 1:
-        return np.array([[0.5773, 0.5774, 0.5775]]) / np.linalg.norm([0.5773, 0.5774, 0.5775])
     # Fibonacci sphere (even coverage for the escape test) turned by a seeded random rotation.
     k = np.arange(count) + 0.5
     z = 1.0 - 2.0 * k / count
