@@ -2,15 +2,14 @@
 
 Each command's options are generated from its typed config dataclass (tyro), so the CLI, the Python API and
 the saved configs always agree. Errors in the user's input print one clear line and exit with status 2.
+Configs and runners are named as ``module:attribute`` strings and imported only when their command runs.
 """
 
 from __future__ import annotations
 
+import importlib
 import sys
-from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
 
 import tyro
 
@@ -19,107 +18,55 @@ from centerart.errors import CenterArtError
 
 @dataclass(frozen=True)
 class Command:
-    config: Callable[[], type]
-    run: Callable[[], Callable[[Any], Any]]
+    config: str  # "module:ConfigDataclass"
+    run: str  # "module:function(config)"
     help: str
 
 
-def _objects_generate():
-    from centerart.assets.dataset import GenerateObjectsConfig
-
-    return GenerateObjectsConfig
-
-
-def _objects_generate_run():
-    from centerart.assets.dataset import generate_objects
-
-    def run(cfg):
-        result = generate_objects(cfg)
-        for cat, c in result["counts"].items():
-            print(
-                f"{cat:18s} {c['objects']:4d} objects ({c['revolute']} revolute, {c['prismatic']} prismatic), "
-                f"{c['rejected_attempts']} rejected attempts"
-            )
-        print(f"wrote {Path(cfg.out) / 'manifest.json'}")
-
-    return run
-
-
-def _objects_show():
-    from centerart.viz.objects_sheet import ShowObjectsConfig
-
-    return ShowObjectsConfig
-
-
-def _objects_show_run():
-    from centerart.viz.objects_sheet import show_objects
-
-    return lambda cfg: print(f"wrote {show_objects(cfg)}")
-
-
-def _grasps_generate():
-    from centerart.grasps.generate import GenerateGraspsConfig
-
-    return GenerateGraspsConfig
-
-
-def _grasps_generate_run():
-    from centerart.grasps.generate import generate_grasps
-
-    def run(cfg):
-        summary = generate_grasps(cfg)
-        for cat, c in summary.items():
-            print(
-                f"{cat:18s} {c['items']:4d} (object, state) items, {c['labels']:6d} labels, yield {c['yield']:.3f}, "
-                f"{c['items_with_100_labels']} items with >= 100 labels"
-            )
-        print(f"wrote {Path(cfg.out) / 'manifest.json'}")
-
-    return run
-
-
-def _grasps_show():
-    from centerart.grasps.show import ShowGraspsConfig
-
-    return ShowGraspsConfig
-
-
-def _grasps_show_run():
-    from centerart.grasps.show import show_grasps
-
-    return lambda cfg: print(f"wrote {show_grasps(cfg)}")
-
-
-def _demo():
-    from centerart.demo import DemoConfig
-
-    return DemoConfig
-
-
-def _demo_run():
-    from centerart.demo import run_demo
-
-    return run_demo
+def _resolve(ref: str):
+    module, attr = ref.split(":")
+    return getattr(importlib.import_module(module), attr)
 
 
 COMMANDS: dict[str, dict[str, Command]] = {
     "objects": {
         "generate": Command(
-            _objects_generate,
-            _objects_generate_run,
+            "centerart.assets.dataset:GenerateObjectsConfig",
+            "centerart.commands:objects_generate",
             "generate procedural articulated objects (PartNet-Mobility layout)",
         ),
-        "show": Command(_objects_show, _objects_show_run, "contact sheet of objects at closed/half/open states"),
+        "show": Command(
+            "centerart.viz.objects_sheet:ShowObjectsConfig",
+            "centerart.commands:objects_show",
+            "contact sheet of objects at closed/half/open states",
+        ),
     },
     "grasps": {
         "generate": Command(
-            _grasps_generate,
-            _grasps_generate_run,
+            "centerart.grasps.generate:GenerateGraspsConfig",
+            "centerart.commands:grasps_generate",
             "physics-verified grasp labels per (object, joint state)",
         ),
-        "show": Command(_grasps_show, _grasps_show_run, "draw stored grasp labels as gripper markers on an object"),
+        "show": Command(
+            "centerart.grasps.show:ShowGraspsConfig",
+            "centerart.commands:grasps_show",
+            "draw stored grasp labels as gripper markers on an object",
+        ),
     },
-    "demo": {"": Command(_demo, _demo_run, "the main job on its built-in default (see README quick start)")},
+    "sdf": {
+        "generate": Command(
+            "centerart.sdf.generate:GenerateSdfConfig",
+            "centerart.commands:sdf_generate",
+            "SDF samples + nearest-grasp targets per (object, joint state)",
+        ),
+    },
+    "demo": {
+        "": Command(
+            "centerart.demo:DemoConfig",
+            "centerart.commands:demo",
+            "the main job on its built-in default (see README quick start)",
+        )
+    },
 }
 
 
@@ -153,17 +100,14 @@ def main(argv: list[str] | None = None) -> int:
             return 2
     cmd = cmds[name]
     prog = f"centerart {group} {name}".strip()
-    cfg = tyro.cli(cmd.config(), args=argv, prog=prog, description=cmd.help)
+    cfg = tyro.cli(_resolve(cmd.config), args=argv, prog=prog, description=cmd.help)
     try:
-        cmd.run()(cfg)
+        _resolve(cmd.run)(cfg)
     except CenterArtError as err:
         print(f"centerart: error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(
-            "centerart: interrupted; finished items are kept, rerun the same command to resume",
-            file=sys.stderr,
-        )
+        print("centerart: interrupted; finished items are kept, rerun the same command to resume", file=sys.stderr)
         return 130
     return 0
 

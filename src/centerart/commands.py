@@ -1,0 +1,69 @@
+"""What each ``centerart`` command runs: call the stage's API with the parsed config and print a short summary.
+
+Kept apart from :mod:`centerart.cli` (which only parses and dispatches) so that importing the CLI stays cheap:
+a stage's heavy imports (torch, SAPIEN, pybullet) happen only when its command runs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def objects_generate(cfg) -> None:
+    from centerart.assets.dataset import generate_objects
+
+    result = generate_objects(cfg)
+    for cat, c in result["counts"].items():
+        print(
+            f"{cat:18s} {c['objects']:4d} objects ({c['revolute']} revolute, {c['prismatic']} prismatic), "
+            f"{c['rejected_attempts']} rejected attempts"
+        )
+    print(f"wrote {Path(cfg.out) / 'manifest.json'}")
+
+
+def objects_show(cfg) -> None:
+    from centerart.viz.objects_sheet import show_objects
+
+    print(f"wrote {show_objects(cfg)}")
+
+
+def grasps_generate(cfg) -> None:
+    from centerart.grasps.generate import generate_grasps
+
+    summary = generate_grasps(cfg)
+    for cat, c in summary.items():
+        print(
+            f"{cat:18s} {c['items']:4d} (object, state) items, {c['labels']:6d} labels, yield {c['yield']:.3f}, "
+            f"{c['items_with_100_labels']} items with >= 100 labels"
+        )
+    print(f"wrote {Path(cfg.out) / 'manifest.json'}")
+
+
+def grasps_show(cfg) -> None:
+    from centerart.grasps.show import show_grasps
+
+    print(f"wrote {show_grasps(cfg)}")
+
+
+def sdf_generate(cfg) -> None:
+    from centerart.sdf.generate import generate_sdf
+
+    summary = generate_sdf(cfg)
+    c = summary["counts"]
+    print(
+        f"{c['objects']} objects, {c['states']} states, {c['points']} points "
+        f"({c['states_without_grasps']} states without grasps)"
+    )
+    for oid, o in summary["objects"].items():
+        flag = "" if o["meets_min_sign_agreement"] else f"  BELOW {summary['min_sign_agreement']:.0%}"
+        print(
+            f"  {oid:28s} sign agreement {o['sign_agreement_min']:.4f} (min), "
+            f"{o['sign_method']} vs {o['check_method']}{flag}"
+        )
+    print(f"wrote {Path(cfg.out) / 'manifest.json'}")
+
+
+def demo(cfg) -> None:
+    from centerart.demo import run_demo
+
+    run_demo(cfg)
