@@ -57,6 +57,39 @@ def _objects_show_run():
     return lambda cfg: print(f"wrote {show_objects(cfg)}")
 
 
+def _grasps_generate():
+    from centerart.grasps.generate import GenerateGraspsConfig
+
+    return GenerateGraspsConfig
+
+
+def _grasps_generate_run():
+    from centerart.grasps.generate import generate_grasps
+
+    def run(cfg):
+        summary = generate_grasps(cfg)
+        for cat, c in summary.items():
+            print(
+                f"{cat:18s} {c['items']:4d} (object, state) items, {c['labels']:6d} labels, yield {c['yield']:.3f}, "
+                f"{c['items_with_100_labels']} items with >= 100 labels"
+            )
+        print(f"wrote {Path(cfg.out) / 'manifest.json'}")
+
+    return run
+
+
+def _grasps_show():
+    from centerart.grasps.show import ShowGraspsConfig
+
+    return ShowGraspsConfig
+
+
+def _grasps_show_run():
+    from centerart.grasps.show import show_grasps
+
+    return lambda cfg: print(f"wrote {show_grasps(cfg)}")
+
+
 def _demo():
     from centerart.demo import DemoConfig
 
@@ -77,6 +110,14 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "generate procedural articulated objects (PartNet-Mobility layout)",
         ),
         "show": Command(_objects_show, _objects_show_run, "contact sheet of objects at closed/half/open states"),
+    },
+    "grasps": {
+        "generate": Command(
+            _grasps_generate,
+            _grasps_generate_run,
+            "physics-verified grasp labels per (object, joint state)",
+        ),
+        "show": Command(_grasps_show, _grasps_show_run, "draw stored grasp labels as gripper markers on an object"),
     },
     "demo": {"": Command(_demo, _demo_run, "the main job on its built-in default (see README quick start)")},
 }

@@ -53,3 +53,38 @@ def control_points(tcp_poses: np.ndarray) -> np.ndarray:
     """Control points (..., 5, 3) of TCP poses (..., 4, 4), in the poses' frame."""
     rot, t = tcp_poses[..., :3, :3], tcp_poses[..., :3, 3]
     return np.einsum("...ij,kj->...ki", rot, CONTROL_POINTS_TCP) + t[..., None, :]
+
+# ---------------------------------------------------------------------------------------------------------------
+# Body geometry (used by the pybullet gripper and by pictures). Hand frame: origin at the back of the palm,
+# z towards the fingers, y along the finger stroke; the TCP is at z = HAND_TO_TCP.
+PALM_SIZE = (0.06, 0.204, HAND_TO_TCP - PALM_TO_TCP)  # m (x, y, z): Franka-hand-like palm block
+PALM_FACE_Z = HAND_TO_TCP - PALM_TO_TCP  # m, where the fingers leave the palm (hand frame z)
+FINGERTIP_BEYOND_TCP = FINGER_LENGTH - PALM_TO_TCP  # m the fingertips reach past the TCP along +z
+
+
+def gripper_boxes(opening: float = MAX_OPENING) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The gripper's three boxes as (extents (3,), ``tcp_T_box`` 4x4) for a finger gap of ``opening`` m.
+
+    Order: palm, finger on -y, finger on +y. Frames: TCP frame, metres.
+    """
+    half = float(np.clip(opening, 0.0, MAX_OPENING)) / 2
+    palm_c = [0.0, 0.0, -PALM_TO_TCP - PALM_SIZE[2] / 2]
+    finger_z = -PALM_TO_TCP + FINGER_LENGTH / 2
+    finger_ext = np.array([FINGER_WIDTH, FINGER_THICKNESS, FINGER_LENGTH])
+    return [
+        (np.array(PALM_SIZE), make_pose(translation=palm_c)),
+        (finger_ext, make_pose(translation=[0.0, -half - FINGER_THICKNESS / 2, finger_z])),
+        (finger_ext, make_pose(translation=[0.0, half + FINGER_THICKNESS / 2, finger_z])),
+    ]
+
+
+def gripper_mesh(tcp_pose: np.ndarray, opening: float = MAX_OPENING):
+    """A trimesh of the gripper boxes at ``F_T_tcp`` (any frame F), for pictures and collision checks."""
+    import trimesh
+
+    meshes = []
+    for extents, tcp_T_box in gripper_boxes(opening):
+        box = trimesh.creation.box(extents=extents)
+        box.apply_transform(tcp_pose @ tcp_T_box)
+        meshes.append(box)
+    return trimesh.util.concatenate(meshes)
