@@ -102,6 +102,56 @@ def _demo_run():
     return run_demo
 
 
+def _train_decoder():
+    from centerart.training.train_decoder import TrainDecoderConfig
+
+    return TrainDecoderConfig
+
+
+def _train_decoder_run():
+    from centerart.training.train_decoder import train_decoder
+
+    def run(cfg):
+        result = train_decoder(cfg)
+        m = result["metrics"]
+        shown = {k: round(v, 5) for k, v in m.items() if k.startswith(("val", "train/"))}
+        print(f"metrics: {shown}")
+        print(f"wrote {result['checkpoint']}")
+
+    return run
+
+
+def _decoder_show():
+    from centerart.inference.decoder_show import ShowDecoderConfig
+
+    return ShowDecoderConfig
+
+
+def _decoder_show_run():
+    from centerart.inference.decoder_show import show_decoder
+
+    return lambda cfg: print(f"wrote {show_decoder(cfg)}")
+
+
+def _eval_decoder():
+    from centerart.evaluation.decoder_eval import EvalDecoderConfig
+
+    return EvalDecoderConfig
+
+
+def _eval_decoder_run():
+    import json
+
+    from centerart.evaluation.decoder_eval import evaluate_decoder
+
+    def run(cfg):
+        report = evaluate_decoder(cfg)
+        print(json.dumps(report["summary"], indent=1))
+        print(f"wrote {Path(cfg.out) / 'report.json'}")
+
+    return run
+
+
 COMMANDS: dict[str, dict[str, Command]] = {
     "objects": {
         "generate": Command(
@@ -118,6 +168,15 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "physics-verified grasp labels per (object, joint state)",
         ),
         "show": Command(_grasps_show, _grasps_show_run, "draw stored grasp labels as gripper markers on an object"),
+    },
+    "train": {
+        "decoder": Command(_train_decoder, _train_decoder_run, "auto-decoder training of the SGDF decoder"),
+    },
+    "decoder": {
+        "show": Command(_decoder_show, _decoder_show_run, "reconstructions with top grasps at several joint states"),
+    },
+    "eval": {
+        "decoder": Command(_eval_decoder, _eval_decoder_run, "decoder shape/grasp/physics metrics per split"),
     },
     "demo": {"": Command(_demo, _demo_run, "the main job on its built-in default (see README quick start)")},
 }

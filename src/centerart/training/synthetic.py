@@ -38,7 +38,7 @@ class BoxCabinet:
 
     def door_T(self, u: float) -> np.ndarray:
         """object_T_door: the door frame (origin at the door centre) at joint code u."""
-        a = u * OPEN_ANGLE
+        a = -u * OPEN_ANGLE  # negative about z: the free edge (+y) swings out toward +x
         c, s = np.cos(a), np.sin(a)
         rz = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
         closed_centre = np.array([self.half_body[0] + DOOR_THICKNESS / 2, 0.0, 0.0])
