@@ -54,6 +54,7 @@ def control_points(tcp_poses: np.ndarray) -> np.ndarray:
     rot, t = tcp_poses[..., :3, :3], tcp_poses[..., :3, 3]
     return np.einsum("...ij,kj->...ki", rot, CONTROL_POINTS_TCP) + t[..., None, :]
 
+
 # ---------------------------------------------------------------------------------------------------------------
 # Body geometry (used by the pybullet gripper and by pictures). Hand frame: origin at the back of the palm,
 # z towards the fingers, y along the finger stroke; the TCP is at z = HAND_TO_TCP.

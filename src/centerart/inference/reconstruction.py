@@ -20,6 +20,7 @@ returned for grasp extraction, at no extra cost.
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -145,7 +146,7 @@ def reconstruct(field_fn: FieldFn, bounds: np.ndarray, cfg: MeshConfig = MeshCon
     values = values.reshape(shape).astype(np.float32)
     evaluated = grid.shape[0]
     last_pts, last_sdf, last_raw = lo + grid * h, values.reshape(-1), raw
-    for prev, res in zip(levels[:-1], levels[1:], strict=True):
+    for prev, res in itertools.pairwise(levels):
         factor = res // prev
         coarse_active = _active_cells(values, cfg.band * h * np.sqrt(3), cfg.dilation)
         h_new = h / factor

@@ -42,7 +42,7 @@ class DecoderModule(L.LightningModule):
         lr_codes: float = 1e-3,
         epochs: int = 100,
         heldout_object_states: list[StateData] | None = None,
-        code_fit: CodeFitConfig = CodeFitConfig(steps=100),
+        code_fit: CodeFitConfig | None = None,
     ):
         super().__init__()
         self.decoder = SGDFDecoder(decoder_config)
@@ -54,7 +54,7 @@ class DecoderModule(L.LightningModule):
         self.lr_codes = lr_codes
         self.epochs = epochs
         self.heldout_object_states = heldout_object_states or []
-        self.code_fit = code_fit
+        self.code_fit = code_fit or CodeFitConfig(steps=100)
         self.save_hyperparameters(
             {
                 "decoder_config": decoder_config.to_dict(),
