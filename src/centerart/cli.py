@@ -90,6 +90,33 @@ def _grasps_show_run():
     return lambda cfg: print(f"wrote {show_grasps(cfg)}")
 
 
+def _sdf_generate():
+    from centerart.sdf.generate import GenerateSdfConfig
+
+    return GenerateSdfConfig
+
+
+def _sdf_generate_run():
+    from centerart.sdf.generate import generate_sdf
+
+    def run(cfg):
+        summary = generate_sdf(cfg)
+        c = summary["counts"]
+        print(
+            f"{c['objects']} objects, {c['states']} states, {c['points']} points "
+            f"({c['states_without_grasps']} states without grasps)"
+        )
+        for oid, o in summary["objects"].items():
+            flag = "" if o["meets_min_sign_agreement"] else f"  BELOW {summary['min_sign_agreement']:.0%}"
+            print(
+                f"  {oid:28s} sign agreement {o['sign_agreement_min']:.4f} (min), "
+                f"{o['sign_method']} vs {o['check_method']}{flag}"
+            )
+        print(f"wrote {Path(cfg.out) / 'manifest.json'}")
+
+    return run
+
+
 def _demo():
     from centerart.demo import DemoConfig
 
@@ -168,6 +195,11 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "physics-verified grasp labels per (object, joint state)",
         ),
         "show": Command(_grasps_show, _grasps_show_run, "draw stored grasp labels as gripper markers on an object"),
+    },
+    "sdf": {
+        "generate": Command(
+            _sdf_generate, _sdf_generate_run, "SDF samples + nearest-grasp targets per (object, joint state)"
+        ),
     },
     "train": {
         "decoder": Command(_train_decoder, _train_decoder_run, "auto-decoder training of the SGDF decoder"),

@@ -1,0 +1,44 @@
+"""The surface an SDF is measured to: one triangle mesh per (object, joint state), canonical frame, metres.
+
+Generated objects are built from closed manifold parts, so their surface is the exact boolean union of the parts
+(closed, consistently oriented, no internal faces). Real PartNet-Mobility meshes are open triangle soups whose
+walls are usually drawn double-sided (every triangle twice, once per orientation): they are kept as they are
+(no voxel remesh, which costs seconds to minutes per state and blurs details finer than its pitch), with
+coincident duplicate triangles removed so that a wall counts as one crossing for ray parity.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from centerart.assets.articulated_object import ArticulatedObject
+from centerart.assets.mesh_ops import union
+
+
+def object_surface(obj: ArticulatedObject, q: float) -> tuple[trimesh.Trimesh, bool]:
+    """``(mesh, closed)``: the object's surface at target joint state ``q`` in the canonical frame.
+
+    ``closed`` is True when the mesh is the exact union of closed parts (generated objects), False for a soup.
+    """
+    parts = [p.mesh for p in obj.parts(q)]
+    if all(m.is_watertight for m in parts):
+        try:
+            return union(parts), True
+        except ValueError:
+            pass  # a part that trimesh calls watertight but manifold3d rejects: treat the object as a soup
+    return dedupe_soup(trimesh.util.concatenate(parts)), False
+
+
+def dedupe_soup(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """Merge coincident vertices and drop repeated triangles (whatever their orientation) and degenerate ones."""
+    out = trimesh.Trimesh(np.asarray(mesh.vertices, float), np.asarray(mesh.faces), process=False)
+    out.merge_vertices(merge_tex=True, merge_norm=True)
+    faces = out.faces
+    keep = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+    faces = faces[keep]
+    _, first = np.unique(np.sort(faces, axis=1), axis=0, return_index=True)
+    faces = faces[np.sort(first)]
+    area = trimesh.triangles.area(out.vertices[faces])
+    faces = faces[area > 1e-12]
+    return trimesh.Trimesh(out.vertices, faces, process=False)
