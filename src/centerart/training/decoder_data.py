@@ -129,8 +129,12 @@ class PointBatchDataset(Dataset):
     The draw uses the torch RNG (seeded by Lightning's ``seed_everything``), so every epoch sees new points.
     """
 
-    def __init__(self, states: list[StateData], code_index: dict[str, int], points_per_item: int):
+    def __init__(
+        self, states: list[StateData], code_index: dict[str, int], points_per_item: int, min_length: int = 0
+    ):
         self.states = states
+        # Small datasets repeat their items so that an "epoch" is long enough to amortise per-epoch overhead.
+        self.length = max(len(states), min_length)
         self.code_index = code_index
         self.points_per_item = points_per_item
         self._tensors = [
@@ -144,9 +148,10 @@ class PointBatchDataset(Dataset):
         ]
 
     def __len__(self) -> int:
-        return len(self.states)
+        return self.length
 
     def __getitem__(self, i: int) -> dict[str, torch.Tensor]:
+        i = i % len(self.states)
         s = self.states[i]
         pts, sdf, gp, gd = self._tensors[i]
         idx = torch.randint(0, len(pts), (self.points_per_item,))

@@ -35,12 +35,14 @@ class TrainDecoderConfig:
     """Output folder (checkpoint, config, logs)."""
     preset: Literal["tiny", "small", "paper"] = "small"
     """Decoder size: tiny (tests), small (CPU), paper (8x512, weight norm, dropout 0.2)."""
-    epochs: int = 200
+    epochs: int = 30
     seed: int = 0
     batch_items: int = 8
     """(object, state) items per step."""
     points_per_item: int = 2048
     """Points drawn per item and step."""
+    min_items_per_epoch: int = 256
+    """An epoch draws at least this many items (small datasets repeat their items)."""
     max_points_per_state: int = 40000
     """Points of each state kept in memory (a seeded random subset)."""
     lr_decoder: float = 5e-4
@@ -117,11 +119,11 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
     )
     gen = torch.Generator().manual_seed(cfg.seed)
     train_loader = DataLoader(
-        PointBatchDataset(train_states, code_index, cfg.points_per_item),
-        batch_size=min(cfg.batch_items, len(train_states)),
+        PointBatchDataset(train_states, code_index, cfg.points_per_item, cfg.min_items_per_epoch),
+        batch_size=cfg.batch_items,
         shuffle=True,
         generator=gen,
-        drop_last=len(train_states) > cfg.batch_items,
+        drop_last=True,
     )
     val_loader = (
         DataLoader(PointBatchDataset(val_states, code_index, cfg.points_per_item), batch_size=cfg.batch_items)
@@ -129,7 +131,7 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
         else None
     )
     loggers = [CSVLogger(out / "logs", name="csv"), TensorBoardLogger(out / "logs", name="tensorboard")]
-    ckpt_cb = ModelCheckpoint(dirpath=out / "lightning", save_last=True, save_top_k=0)
+    ckpt_cb = ModelCheckpoint(dirpath=out / "lightning", save_last=True, save_top_k=0, every_n_epochs=cfg.val_every)
     trainer = L.Trainer(
         max_epochs=cfg.epochs,
         accelerator=cfg.accelerator,
@@ -160,7 +162,7 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
         metrics.update({k: float(v) for k, v in trainer.callback_metrics.items() if k.startswith("val")})
     elif obj_states:
         metrics.update({f"val_object/{k}": v for k, v in module.heldout_object_metrics().items()})
-    points_seen = trainer.global_step * min(cfg.batch_items, len(train_states)) * cfg.points_per_item
+    points_seen = trainer.global_step * cfg.batch_items * cfg.points_per_item
     metrics["train_seconds"] = seconds
     metrics["train_points_per_second"] = points_seen / max(seconds, 1e-9)
     module.decoder.cpu()
