@@ -134,12 +134,10 @@ def _cell_corner_mask(cells: np.ndarray) -> np.ndarray:
 def reconstruct(field_fn: FieldFn, bounds: np.ndarray, cfg: MeshConfig = MeshConfig()) -> Reconstruction:
     """Coarse-to-fine mesh of ``field_fn`` inside ``bounds`` (2, 3)."""
     t0 = time.perf_counter()
-    levels = []
-    r = cfg.coarse_resolution
-    while r < cfg.resolution:
-        levels.append(r)
-        r *= 2
-    levels.append(cfg.resolution)
+    # Halve from the final resolution while the level stays >= coarse_resolution (every step doubles).
+    levels = [cfg.resolution]
+    while levels[0] % 2 == 0 and levels[0] // 2 >= cfg.coarse_resolution:
+        levels.insert(0, levels[0] // 2)
     lo, h, shape = _lattice(bounds, levels[0])
     grid = np.stack(np.meshgrid(*[np.arange(n) for n in shape], indexing="ij"), -1).reshape(-1, 3)
     values, raw = field_fn(lo + grid * h)

@@ -129,9 +129,7 @@ class PointBatchDataset(Dataset):
     The draw uses the torch RNG (seeded by Lightning's ``seed_everything``), so every epoch sees new points.
     """
 
-    def __init__(
-        self, states: list[StateData], code_index: dict[str, int], points_per_item: int, min_length: int = 0
-    ):
+    def __init__(self, states: list[StateData], code_index: dict[str, int], points_per_item: int, min_length: int = 0):
         self.states = states
         # Small datasets repeat their items so that an "epoch" is long enough to amortise per-epoch overhead.
         self.length = max(len(states), min_length)
