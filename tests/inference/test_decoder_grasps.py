@@ -46,7 +46,8 @@ class ExactCabinetDecoder(nn.Module):
         return DecoderOutput(sdf=r[:, 0], offset=r[:, 1:4], rotation=gram_schmidt(r[:, 4:7], r[:, 7:10]), raw=r)
 
 
-def _run(dec, u, cfg=GraspExtractionConfig()):
+def _run(dec, u, cfg=None):
+    cfg = cfg or GraspExtractionConfig()
     code = np.zeros(2, np.float32)
     rec = reconstruct_object(dec, code, u, BOUNDS, MeshConfig(resolution=96))
     return rec, extract_grasps(dec, code, u, rec, cfg)

@@ -41,7 +41,7 @@ def test_tiny_preset_loss_falls(box_data):
     opt = module.configure_optimizers()["optimizer"]
     batch = torch.utils.data.default_collate([ds[i] for i in range(len(ds))])
     losses = []
-    for step in range(60):
+    for _ in range(60):
         f = module._flat(batch)  # the training step's computation, without Lightning's logging
         out = module.decoder(f["code"], f["joint"], f["xyz"])
         loss = decoder_loss(
@@ -92,7 +92,7 @@ def test_bad_inputs_raise_centerart_errors(tmp_path):
         train_decoder(TrainDecoderConfig(data=tmp_path / "missing", out=tmp_path / "o"))
     (tmp_path / "obj").mkdir()
     (tmp_path / "obj" / "state_00.npz").write_bytes(b"not a zip")
-    with pytest.raises(CenterArtError, match="state_00.npz"):
+    with pytest.raises(CenterArtError, match=r"state_00\.npz"):
         load_states(tmp_path, progress=False)
-    with pytest.raises(CenterArtError, match="not a readable torch checkpoint|not a centerart"):
+    with pytest.raises(CenterArtError, match=r"not a readable torch checkpoint|not a centerart"):
         load_decoder(tmp_path / "obj" / "state_00.npz")
