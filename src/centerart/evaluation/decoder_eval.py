@@ -214,7 +214,12 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
         rs = [r for r in results if r.group == g]
         if not rs:
             continue
-        row = {"states": len(rs), "objects": len({r.object_id for r in rs})}
+        row = {
+            "states": len(rs),
+            "objects": len({r.object_id for r in rs}),
+            # no zero crossing predicted: Chamfer is undefined (left out of its mean), F-score counts as 0
+            "empty_meshes": sum(not np.isfinite(r.chamfer_mm) for r in rs),
+        }
         for key in (
             "chamfer_mm",
             "fscore",
