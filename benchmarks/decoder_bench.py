@@ -4,7 +4,7 @@ Measures (CPU, ``--threads`` torch threads):
 
 - ``training``: optimisation steps/s and points/s of the auto-decoder loss (forward + backward + Adam) for the
   ``tiny`` and ``small`` presets at 16384 points per step;
-- ``meshing``: per training object of the checkpoint at three joint codes, coarse-to-fine mesh + grasp extraction
+- ``meshing``: per training object of the checkpoint at the given joint codes, coarse-to-fine mesh + grasp extraction
   time against one dense 128^3 evaluation of the same network + marching cubes, network evaluations of each, and
   Chamfer-L1 (mm) of both meshes against the true mesh (``ArticulatedObject.watertight_mesh``);
 - ``evaluation``: the summary of an ``centerart eval decoder`` report, when ``--eval-report`` is given.
@@ -58,7 +58,7 @@ def bench_training(threads: int, steps: int = 10, points: int = 16384) -> dict:
     return out
 
 
-def bench_meshing(checkpoint, objects: Path, n_objects: int) -> dict:
+def bench_meshing(checkpoint, objects: Path, n_objects: int, joint_codes: list[float]) -> dict:
     from centerart.assets.articulated_object import ArticulatedObject
     from centerart.evaluation.decoder_eval import chamfer_fscore
     from centerart.inference.decoder_grasps import extract_grasps
@@ -71,7 +71,7 @@ def bench_meshing(checkpoint, objects: Path, n_objects: int) -> dict:
     for oid in ids:
         obj = ArticulatedObject.load(objects / oid)
         code = loaded.codes[oid]
-        for u in (0.0, 0.5, 1.0):
+        for u in joint_codes:
             field = decoder_field(loaded.decoder, code, u)
             t0 = time.perf_counter()
             rec = reconstruct(field, loaded.bounds, MeshConfig(resolution=128))
@@ -108,6 +108,7 @@ def main() -> None:
     ap.add_argument("--checkpoint", type=Path, default=None, help="default: the shipped small checkpoint")
     ap.add_argument("--objects", type=Path, required=True, help="object folders of the checkpoint's objects")
     ap.add_argument("--n-objects", type=int, default=3)
+    ap.add_argument("--joint-codes", type=float, nargs="+", default=[0.0, 0.5, 1.0])
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--eval-report", type=Path, default=None)
     args = ap.parse_args()
@@ -115,7 +116,7 @@ def main() -> None:
     result = {
         "machine": {"platform": platform.platform(), "processor": platform.processor(), "torch_threads": args.threads},
         "training": bench_training(args.threads),
-        "meshing": bench_meshing(args.checkpoint, args.objects, args.n_objects),
+        "meshing": bench_meshing(args.checkpoint, args.objects, args.n_objects, args.joint_codes),
     }
     if args.eval_report:
         result["evaluation"] = json.loads(args.eval_report.read_text())["summary"]

@@ -59,7 +59,7 @@ class EvalDecoderConfig:
     top_k: int = 5
     top_k_coverage: int = 20
     resolution: int = 128
-    code_fit_steps: int = 400
+    code_fit_steps: int = 200
     seed: int = 0
     max_objects: int | None = None
 
@@ -179,7 +179,9 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
                 codes[oid] = loaded.code(oid)
             else:
                 obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in by_obj[oid]])
-                codes[oid] = fit_code(loaded.decoder, obs, CodeFitConfig(steps=cfg.code_fit_steps, seed=cfg.seed))[0]
+                codes[oid] = fit_code(
+                    loaded.decoder, obs, CodeFitConfig(steps=cfg.code_fit_steps, points_per_step=4096, seed=cfg.seed)
+                )[0]
         st = next(s for s in by_obj[oid] if s.state_index == k)
         obj = ArticulatedObject.load(obj_folder)
         q = obj.denormalize(st.joint)

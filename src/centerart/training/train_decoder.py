@@ -131,7 +131,9 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
         else None
     )
     loggers = [CSVLogger(out / "logs", name="csv"), TensorBoardLogger(out / "logs", name="tensorboard")]
-    ckpt_cb = ModelCheckpoint(dirpath=out / "lightning", save_last=True, save_top_k=0, every_n_epochs=cfg.val_every)
+    ckpt_cb = ModelCheckpoint(
+        dirpath=out / "lightning", save_last=True, save_top_k=1, every_n_epochs=cfg.val_every
+    )  # no monitor: keeps the newest epoch checkpoint; last.ckpt is what a rerun resumes from
     trainer = L.Trainer(
         max_epochs=cfg.epochs,
         accelerator=cfg.accelerator,
