@@ -10,7 +10,7 @@ from centerart.inference.decoder_grasps import predict_shape_and_grasps
 from centerart.inference.reconstruction import MeshConfig
 from centerart.models.checkpoint import WEIGHTS_DIR, default_checkpoint, load_decoder, load_shape_codes
 
-OBJECT = "microwave_0000"  # a training object of the shipped checkpoint (see weights/README.md)
+OBJECT = "microwave_0001"  # a training object of the shipped checkpoint (see weights/README.md)
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +32,7 @@ def test_shipped_checkpoint_reconstructs_training_object(shipped, tmp_path):
     from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
 
     # The generator is deterministic per (seed, category, index): this rebuilds the training object exactly.
-    generate_objects(GenerateObjectsConfig(out=tmp_path, category="microwave", count=1, seed=0, workers=1))
+    generate_objects(GenerateObjectsConfig(out=tmp_path, category="microwave", count=2, seed=0, workers=1))
     obj = ArticulatedObject.load(tmp_path / OBJECT)
     report = json.loads((WEIGHTS_DIR / "sgdf_small_eval.json").read_text())
     bound = report["train_chamfer_mm"][OBJECT]["0"]  # measured by `centerart eval decoder`, state 0

@@ -50,6 +50,9 @@ class MeshConfig:
     growth rounds then add every straddling cell, so a tight guess only saves evaluations."""
     dilation: int = 0
     """Extra rings of active cells per level (safety margin for fields that are far from 1-Lipschitz)."""
+    tight_bounds: bool = False
+    """reconstruct_object: first find the object's own extent inside the given bounds (one coarse pass). Off by
+    default: on the shipped checkpoint it changed Chamfer by < 1 mm at 1.5x the time (network error dominates)."""
     max_growth: int = 8
     """Rounds per level of adding network evaluations at cells that straddle zero but were only interpolated."""
     chunk: int = 65536
@@ -216,6 +219,21 @@ def decoder_outputs(raw: np.ndarray) -> DecoderOutput:
     return DecoderOutput(sdf=r[:, 0], offset=r[:, 1:4], rotation=gram_schmidt(r[:, 4:7], r[:, 7:10]), raw=r)
 
 
+def object_bounds(field_fn: FieldFn, bounds: np.ndarray, resolution: int = 32, margin_cells: float = 1.5) -> np.ndarray:
+    """The part of ``bounds`` the object occupies: a ``resolution`` lattice pass keeps the points within half a
+    cell diagonal of the surface or inside, padded by ``margin_cells`` cells. Checkpoint bounds cover the
+    largest training object, so meshing a small object inside them would waste most of the final resolution."""
+    lo, h, shape = _lattice(bounds, resolution)
+    grid = np.stack(np.meshgrid(*[np.arange(n) for n in shape], indexing="ij"), -1).reshape(-1, 3)
+    pts = lo + grid * h
+    sdf, _ = field_fn(pts)
+    occupied = pts[sdf < 0.5 * np.sqrt(3) * h]
+    if len(occupied) == 0:
+        return np.asarray(bounds, np.float64)
+    tight = np.stack([occupied.min(0) - margin_cells * h, occupied.max(0) + margin_cells * h])
+    return np.stack([np.maximum(tight[0], bounds[0]), np.minimum(tight[1], bounds[1])])
+
+
 def reconstruct_object(
     decoder: SGDFDecoder,
     code: np.ndarray,
@@ -224,5 +242,19 @@ def reconstruct_object(
     cfg: MeshConfig = MeshConfig(),
     device: str | torch.device = "cpu",
 ) -> Reconstruction:
-    """Mesh (and final-level network outputs) of one object at normalized joint code ``joint``."""
-    return reconstruct(decoder_field(decoder, code, joint, cfg.chunk, device), bounds, cfg)
+    """Mesh (and final-level network outputs) of one object at normalized joint code ``joint``, meshed inside
+    the object's own extent (:func:`object_bounds`) within ``bounds``."""
+    field_fn = decoder_field(decoder, code, joint, cfg.chunk, device)
+    t0 = time.perf_counter()
+    tight = (
+        object_bounds(field_fn, np.asarray(bounds, np.float64), cfg.coarse_resolution * 2)
+        if cfg.tight_bounds
+        else bounds
+    )
+    t_bounds = time.perf_counter() - t0
+    rec = reconstruct(field_fn, tight, cfg)
+    if cfg.tight_bounds:
+        rec.stats["seconds"] += t_bounds
+        rec.stats["evaluated_points"] += int(np.prod(_lattice(bounds, cfg.coarse_resolution * 2)[2]))
+    rec.stats["bounds"] = np.asarray(tight).tolist()
+    return rec
