@@ -60,6 +60,27 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "SDF samples + nearest-grasp targets per (object, joint state)",
         ),
     },
+    "train": {
+        "decoder": Command(
+            "centerart.training.train_decoder:TrainDecoderConfig",
+            "centerart.commands:train_decoder",
+            "auto-decoder training of the SGDF decoder",
+        ),
+    },
+    "decoder": {
+        "show": Command(
+            "centerart.inference.decoder_show:ShowDecoderConfig",
+            "centerart.commands:decoder_show",
+            "reconstructions with top grasps at several joint states",
+        ),
+    },
+    "eval": {
+        "decoder": Command(
+            "centerart.evaluation.decoder_eval:EvalDecoderConfig",
+            "centerart.commands:eval_decoder",
+            "decoder shape/grasp/physics metrics per split",
+        ),
+    },
     "demo": {
         "": Command(
             "centerart.demo:DemoConfig",

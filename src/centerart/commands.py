@@ -67,3 +67,28 @@ def demo(cfg) -> None:
     from centerart.demo import run_demo
 
     run_demo(cfg)
+
+
+def train_decoder(cfg) -> None:
+    from centerart.training.train_decoder import train_decoder as train
+
+    result = train(cfg)
+    shown = {k: round(v, 5) for k, v in result["metrics"].items() if k.startswith(("val", "train/"))}
+    print(f"metrics: {shown}")
+    print(f"wrote {result['checkpoint']}")
+
+
+def decoder_show(cfg) -> None:
+    from centerart.inference.decoder_show import show_decoder
+
+    print(f"wrote {show_decoder(cfg)}")
+
+
+def eval_decoder(cfg) -> None:
+    import json
+
+    from centerart.evaluation.decoder_eval import evaluate_decoder
+
+    report = evaluate_decoder(cfg)
+    print(json.dumps(report["summary"], indent=1))
+    print(f"wrote {Path(cfg.out) / 'report.json'}")

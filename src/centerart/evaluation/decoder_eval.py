@@ -1,0 +1,289 @@
+"""``centerart eval decoder``: shape and grasp quality of a decoder checkpoint, per split.
+
+Groups (from the split stored in the checkpoint):
+
+- ``train``: training objects at their training states (trained codes);
+- ``heldout_state``: training objects at held-out joint states (trained codes, unseen joint codes);
+- ``heldout_object``: objects without a trained code (held out in training, or any other object in --data);
+  their code is fitted to all their SDF samples with the decoder frozen (``inference/code_fitting.py``).
+
+Per (object, state), in the object's canonical frame:
+
+- shape: the coarse-to-fine mesh at the state's normalized joint code against
+  ``ArticulatedObject.watertight_mesh(q)``: Chamfer-L1 in mm (mean of both directions, ``SURFACE_SAMPLES``
+  surface samples each) and F-score at ``FSCORE_THRESHOLD``;
+- grasps (with --grasps): precision@k = share of the top-k predictions within ``GRASP_MATCH_DISTANCE`` (TCP
+  position) and ``GRASP_MATCH_ANGLE_DEG`` (rotation, finger-swapped gripper counted as equal) of some label;
+  coverage = share of labels matched by some returned prediction (all ranked grasps, up to ``top_k_coverage``);
+- physics (with --physics, default on): the top-1 and the top-5 predictions executed one by one with the
+  grasp-label simulator (``grasps/executor.py``: same gripper, forces and success rule as the labels; no
+  denominator trimming: a missing prediction counts as a failure). top-1 success = the first grasp succeeds;
+  top-5 success = mean over the 5 slots (missing slots fail); any-of-5 = at least one succeeds.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+from tqdm import tqdm
+
+from centerart.errors import CenterArtError
+
+FSCORE_THRESHOLD = 0.01  # m
+SURFACE_SAMPLES = 30000
+GRASP_MATCH_DISTANCE = 0.02  # m
+GRASP_MATCH_ANGLE_DEG = 30.0
+GROUPS = ("train", "heldout_state", "heldout_object")
+
+
+@dataclass
+class EvalDecoderConfig:
+    data: Path
+    """SDF sample folder the checkpoint was trained on (or any SDF folder of other objects)."""
+    objects: Path
+    """Object folders (for the true meshes at each state)."""
+    out: Path = Path("decoder_eval")
+    """Output folder: report.json and plots."""
+    checkpoint: Path | None = None
+    """Decoder checkpoint (default: the shipped small checkpoint)."""
+    grasps: Path | None = None
+    """Grasp-label folder (``centerart grasps generate`` output) for precision/coverage."""
+    physics: bool = True
+    """Execute the top-1/top-5 predicted grasps in pybullet (needs --grasps only for the metrics above)."""
+    states_per_object: int = 3
+    """Evaluate at most this many states per (object, group), evenly chosen."""
+    top_k: int = 5
+    top_k_coverage: int = 20
+    resolution: int = 128
+    code_fit_steps: int = 200
+    seed: int = 0
+    max_objects: int | None = None
+
+
+# --------------------------------------------------------------------------------------- metric functions
+def chamfer_fscore(pred, true, n: int = SURFACE_SAMPLES, threshold: float = FSCORE_THRESHOLD, seed: int = 0):
+    """(Chamfer-L1 in mm, F-score) between two meshes; an empty prediction gives (inf, 0)."""
+    import trimesh
+
+    if len(pred.faces) == 0:
+        return float("inf"), 0.0
+    a, _ = trimesh.sample.sample_surface(pred, n, seed=seed)
+    b, _ = trimesh.sample.sample_surface(true, n, seed=seed + 1)
+    d_ab = cKDTree(b).query(a)[0]
+    d_ba = cKDTree(a).query(b)[0]
+    chamfer_mm = 1000.0 * 0.5 * (d_ab.mean() + d_ba.mean())
+    precision, recall = (d_ab < threshold).mean(), (d_ba < threshold).mean()
+    f = 0.0 if precision + recall == 0 else 2 * precision * recall / (precision + recall)
+    return float(chamfer_mm), float(f)
+
+
+def grasp_matches(pred: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """(P, L) bool: prediction p is within the match thresholds of label l (finger symmetry)."""
+    from centerart.inference.decoder_grasps import rotation_angle_symmetric
+
+    if len(pred) == 0 or len(labels) == 0:
+        return np.zeros((len(pred), len(labels)), bool)
+    d = np.linalg.norm(pred[:, None, :3, 3] - labels[None, :, :3, 3], axis=-1)
+    ang = rotation_angle_symmetric(pred[:, None, :3, :3], labels[None, :, :3, :3])
+    return (d < GRASP_MATCH_DISTANCE) & (ang < np.deg2rad(GRASP_MATCH_ANGLE_DEG))
+
+
+# --------------------------------------------------------------------------------------- evaluation
+@dataclass
+class StateResult:
+    object_id: str
+    state_index: int
+    group: str
+    joint: float
+    chamfer_mm: float
+    fscore: float
+    seconds_mesh_grasps: float
+    num_grasps: int
+    precision_at_k: float | None = None
+    coverage: float | None = None
+    physics_top1: float | None = None
+    physics_top5: float | None = None
+    physics_any5: float | None = None
+    extra: dict = field(default_factory=dict)
+
+
+def _select(indices: list[int], k: int) -> list[int]:
+    if len(indices) <= k:
+        return indices
+    return [indices[i] for i in np.linspace(0, len(indices) - 1, k).round().astype(int)]
+
+
+def _physics(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
+    """Execute up to k TCP poses (object frame = world frame here) on the object at state q."""
+    import pybullet as pb
+
+    from centerart.grasps import executor as ex
+    from centerart.grasps.sim_world import connect, load_object
+
+    client = connect()
+    try:
+        target = load_object(client, obj, q)
+        executor = ex.GraspExecutor(client)
+        direction = ex.commanded_direction(obj.joint_type, q, obj.joint_range[1])
+        return [bool(executor.execute(p, target, direction).success) for p in poses[:k]]
+    finally:
+        pb.disconnect(client)
+
+
+def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
+    from centerart.assets.articulated_object import ArticulatedObject
+    from centerart.grasps.labels import StateLabels
+    from centerart.inference.code_fitting import CodeFitConfig, Observations, fit_code
+    from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_shape_and_grasps
+    from centerart.inference.reconstruction import MeshConfig
+    from centerart.models.checkpoint import load_decoder
+    from centerart.training.decoder_data import DecoderSplit, load_states
+    from centerart.utils.atomic import atomic_write_json
+    from centerart.utils.manifest import code_version
+
+    loaded = load_decoder(cfg.checkpoint)
+    split = DecoderSplit.from_dict(loaded.meta["split"]) if loaded.meta.get("split") else None
+    states = load_states(cfg.data, 30000, cfg.seed, progress=False)
+    by_obj: dict[str, list] = {}
+    for s in states:
+        by_obj.setdefault(s.object_id, []).append(s)
+    objects = sorted(by_obj)[: cfg.max_objects] if cfg.max_objects else sorted(by_obj)
+    mesh_cfg = MeshConfig(resolution=cfg.resolution)
+    grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k, cfg.top_k_coverage))
+    results: list[StateResult] = []
+    jobs = []
+    for oid in objects:
+        trained = oid in loaded.codes
+        groups: dict[str, list[int]] = {}
+        for s in by_obj[oid]:
+            if not trained:
+                g = "heldout_object"
+            elif split is not None and s.state_index in split.heldout_states.get(oid, []):
+                g = "heldout_state"
+            else:
+                g = "train"
+            groups.setdefault(g, []).append(s.state_index)
+        for g, idx in groups.items():
+            jobs.extend((oid, g, k) for k in _select(sorted(idx), cfg.states_per_object))
+    codes: dict[str, np.ndarray] = {}
+    for oid, g, k in tqdm(jobs, desc="eval decoder"):
+        obj_folder = Path(cfg.objects) / oid
+        if not obj_folder.is_dir():
+            raise CenterArtError(f"{obj_folder}: object folder missing (needed for the true mesh of {oid})")
+        if oid not in codes:
+            if oid in loaded.codes:
+                codes[oid] = loaded.code(oid)
+            else:
+                obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in by_obj[oid]])
+                codes[oid] = fit_code(
+                    loaded.decoder, obs, CodeFitConfig(steps=cfg.code_fit_steps, points_per_step=4096, seed=cfg.seed)
+                )[0]
+        st = next(s for s in by_obj[oid] if s.state_index == k)
+        obj = ArticulatedObject.load(obj_folder)
+        q = obj.denormalize(st.joint)
+        t0 = time.perf_counter()
+        recon, grasps = predict_shape_and_grasps(
+            loaded.decoder, codes[oid], st.joint, loaded.bounds, mesh_cfg, grasp_cfg
+        )
+        seconds = time.perf_counter() - t0
+        cd, fs = chamfer_fscore(recon.mesh, obj.watertight_mesh(q), seed=cfg.seed)
+        r = StateResult(oid, k, g, st.joint, cd, fs, seconds, len(grasps))
+        r.extra["evaluated_points"] = recon.stats["evaluated_points"]
+        if cfg.grasps is not None:
+            from centerart.grasps.labels import state_path
+
+            lp = state_path(cfg.grasps, oid, k)
+            if lp.is_file():
+                lab = StateLabels.load(lp)
+                if lab.count:
+                    topk = grasps.poses[: cfg.top_k]
+                    m = grasp_matches(grasps.poses, lab.poses.astype(np.float64))
+                    r.precision_at_k = float(m[: cfg.top_k].any(1).sum() / cfg.top_k) if len(topk) else 0.0
+                    r.coverage = float(m.any(0).mean()) if len(m) else 0.0
+                    r.extra["labels"] = lab.count
+        if cfg.physics:
+            ok = _physics(obj, q, grasps.poses, 5)
+            ok += [False] * (5 - len(ok))
+            r.physics_top1, r.physics_top5, r.physics_any5 = float(ok[0]), float(np.mean(ok)), float(any(ok))
+        results.append(r)
+
+    summary = {}
+    for g in GROUPS:
+        rs = [r for r in results if r.group == g]
+        if not rs:
+            continue
+        row = {
+            "states": len(rs),
+            "objects": len({r.object_id for r in rs}),
+            # no zero crossing predicted: Chamfer is undefined (left out of its mean), F-score counts as 0
+            "empty_meshes": sum(not np.isfinite(r.chamfer_mm) for r in rs),
+        }
+        for key in (
+            "chamfer_mm",
+            "fscore",
+            "precision_at_k",
+            "coverage",
+            "physics_top1",
+            "physics_top5",
+            "physics_any5",
+            "seconds_mesh_grasps",
+        ):
+            vals = [getattr(r, key) for r in rs if getattr(r, key) is not None and np.isfinite(getattr(r, key))]
+            if vals:
+                row[key] = float(np.mean(vals))
+                if key == "chamfer_mm":
+                    row["chamfer_mm_median"] = float(np.median(vals))
+        summary[g] = row
+    report = {
+        "checkpoint": str(loaded.path),
+        "config": {k: str(v) if isinstance(v, Path) else v for k, v in asdict(cfg).items()},
+        "thresholds": {
+            "fscore_m": FSCORE_THRESHOLD,
+            "surface_samples": SURFACE_SAMPLES,
+            "grasp_match_distance_m": GRASP_MATCH_DISTANCE,
+            "grasp_match_angle_deg": GRASP_MATCH_ANGLE_DEG,
+            "top_k": cfg.top_k,
+        },
+        "summary": summary,
+        "states": [asdict(r) for r in results],
+        "code_version": code_version(),
+    }
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_json(out / "report.json", report)
+    _plots(results, out)
+    return report
+
+
+def _plots(results: list[StateResult], out: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups = [g for g in GROUPS if any(r.group == g for r in results)]
+    if not groups:
+        return
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), dpi=100)
+    data = [[r.chamfer_mm for r in results if r.group == g and np.isfinite(r.chamfer_mm)] for g in groups]
+    axes[0].boxplot(data, tick_labels=groups)
+    axes[0].set_ylabel("Chamfer-L1 (mm)")
+    axes[1].bar(groups, [np.mean([r.fscore for r in results if r.group == g]) for g in groups])
+    axes[1].set_ylabel(f"F-score@{FSCORE_THRESHOLD * 100:.0f}cm")
+    for i, key in enumerate(("precision_at_k", "coverage", "physics_top1")):
+        vals = [
+            np.mean([getattr(r, key) for r in results if r.group == g and getattr(r, key) is not None] or [np.nan])
+            for g in groups
+        ]
+        axes[2].bar(np.arange(len(groups)) + (i - 1) * 0.27, vals, width=0.27, label=key)
+    axes[2].set_xticks(np.arange(len(groups)), groups)
+    axes[2].set_ylim(0, 1)
+    axes[2].legend(fontsize=8)
+    axes[2].set_title("grasps")
+    fig.tight_layout()
+    fig.savefig(out / "report.png")
+    plt.close(fig)

@@ -1,0 +1,260 @@
+"""Meshes from the decoder by coarse-to-fine evaluation and marching cubes (object canonical frame, metres).
+
+Coarse-to-fine (never a dense pass at the final resolution):
+
+1. evaluate the network on a coarse lattice (``coarse_resolution`` cells along the longest side of the box);
+2. a cell is *active* when one of its corners has |sdf| below ``band`` cell diagonals or its corners change
+   sign (a distance field crossing zero inside a cell has a corner within half a diagonal); optionally dilated;
+3. double the resolution: values everywhere start as the trilinear upsampling of the previous level; inside the
+   active coarse cells, the network is evaluated at the corners of the fine cells that the interpolated values
+   put within ``fine_band`` fine diagonals of zero; then, in rounds, at the corners of every fine cell that straddles
+   zero but still has interpolated corners, until every such cell is fully evaluated;
+4. repeat to ``resolution``, then run marching cubes (skimage) on the final lattice.
+
+Away from the surface the upsampled values keep the sign of the coarse corners (no sign change in an inactive
+cell, and trilinear interpolation of same-sign corners keeps that sign), so marching cubes finds the zero level
+set only where the network was evaluated at full resolution: the mesh equals the dense mesh wherever the band
+covers the surface. The final level's evaluated points and the full network outputs there (SDF and grasps) are
+returned for grasp extraction, at no extra cost.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+import trimesh
+from scipy import ndimage
+
+from centerart.models.decoder import DecoderOutput, SGDFDecoder
+
+FieldFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray | None]]
+"""points (N, 3) -> (sdf (N,), raw decoder outputs (N, 10) or None)."""
+
+
+@dataclass(frozen=True)
+class MeshConfig:
+    resolution: int = 128
+    """Final lattice cells along the longest side of the box."""
+    coarse_resolution: int = 16
+    band: float = 0.6
+    """Active-cell threshold, in cell diagonals of the current level. Every point of a cube is within half a
+    diagonal of a corner, so 0.5 is exact for a true distance field; 0.6 leaves a margin for the network."""
+    fine_band: float = 0.1
+    """First-guess threshold at each finer level, in fine-cell diagonals, applied to *interpolated* values; the
+    growth rounds then add every straddling cell, so a tight guess only saves evaluations."""
+    dilation: int = 0
+    """Extra rings of active cells per level (safety margin for fields that are far from 1-Lipschitz)."""
+    tight_bounds: bool = False
+    """reconstruct_object: first find the object's own extent inside the given bounds (one coarse pass). Off by
+    default: on the shipped checkpoint it changed Chamfer by < 1 mm at 1.5x the time (network error dominates)."""
+    max_growth: int = 8
+    """Rounds per level of adding network evaluations at cells that straddle zero but were only interpolated."""
+    chunk: int = 65536
+    """Points per network call."""
+
+
+@dataclass
+class Reconstruction:
+    mesh: trimesh.Trimesh
+    points: np.ndarray  # (M, 3) final-level evaluated points
+    sdf: np.ndarray  # (M,)
+    raw: np.ndarray | None  # (M, 10) decoder outputs there (None for analytic fields)
+    stats: dict = field(default_factory=dict)
+
+
+def decoder_field(
+    decoder: SGDFDecoder, code: np.ndarray, joint: float, chunk: int = 65536, device: str | torch.device = "cpu"
+) -> FieldFn:
+    """The decoder at a fixed shape code and joint code, as a numpy field function."""
+    code_t = torch.as_tensor(np.asarray(code, np.float32), device=device)
+
+    def fn(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        sdf, raw = [], []
+        with torch.no_grad():
+            for i in range(0, len(points), chunk):
+                x = torch.as_tensor(np.asarray(points[i : i + chunk], np.float32), device=device)
+                out = decoder(code_t.expand(len(x), -1), torch.full((len(x),), float(joint), device=device), x)
+                sdf.append(out.sdf.cpu().numpy())
+                raw.append(out.raw.cpu().numpy())
+        if not sdf:
+            return np.zeros(0, np.float32), np.zeros((0, 10), np.float32)
+        return np.concatenate(sdf), np.concatenate(raw)
+
+    return fn
+
+
+def _lattice(bounds: np.ndarray, resolution: int) -> tuple[np.ndarray, float, tuple[int, int, int]]:
+    """Origin, spacing and point counts per axis of a lattice with ``resolution`` cells on the longest side."""
+    lo, hi = np.asarray(bounds, np.float64)
+    h = float((hi - lo).max() / resolution)
+    cells = np.maximum(np.ceil((hi - lo) / h - 1e-9).astype(int), 1)
+    return lo, h, tuple(int(c) + 1 for c in cells)
+
+
+def _active_cells(values: np.ndarray, threshold: float, dilation: int) -> np.ndarray:
+    v = values
+    corners = [
+        v[i : v.shape[0] - 1 + i, j : v.shape[1] - 1 + j, k : v.shape[2] - 1 + k]
+        for i in (0, 1)
+        for j in (0, 1)
+        for k in (0, 1)
+    ]
+    stack = np.stack(corners)
+    near = np.abs(stack).min(0) < threshold
+    sign_change = (stack.min(0) < 0) & (stack.max(0) > 0)
+    active = near | sign_change
+    return ndimage.binary_dilation(active, iterations=dilation) if dilation > 0 else active
+
+
+def _sign_change_cells(v: np.ndarray) -> np.ndarray:
+    corners = np.stack(
+        [
+            v[i : v.shape[0] - 1 + i, j : v.shape[1] - 1 + j, k : v.shape[2] - 1 + k]
+            for i in (0, 1)
+            for j in (0, 1)
+            for k in (0, 1)
+        ]
+    )
+    return (corners.min(0) < 0) & (corners.max(0) > 0)
+
+
+def _cell_corner_mask(cells: np.ndarray) -> np.ndarray:
+    """Points (shape + 1) that are a corner of any marked cell."""
+    m = np.zeros(tuple(s + 1 for s in cells.shape), bool)
+    for i in (0, 1):
+        for j in (0, 1):
+            for k in (0, 1):
+                m[i : i + cells.shape[0], j : j + cells.shape[1], k : k + cells.shape[2]] |= cells
+    return m
+
+
+def reconstruct(field_fn: FieldFn, bounds: np.ndarray, cfg: MeshConfig = MeshConfig()) -> Reconstruction:
+    """Coarse-to-fine mesh of ``field_fn`` inside ``bounds`` (2, 3)."""
+    t0 = time.perf_counter()
+    # Halve from the final resolution while the level stays >= coarse_resolution (every step doubles).
+    levels = [cfg.resolution]
+    while levels[0] % 2 == 0 and levels[0] // 2 >= cfg.coarse_resolution:
+        levels.insert(0, levels[0] // 2)
+    lo, h, shape = _lattice(bounds, levels[0])
+    grid = np.stack(np.meshgrid(*[np.arange(n) for n in shape], indexing="ij"), -1).reshape(-1, 3)
+    values, raw = field_fn(lo + grid * h)
+    values = values.reshape(shape).astype(np.float32)
+    evaluated = grid.shape[0]
+    last_pts, last_sdf, last_raw = lo + grid * h, values.reshape(-1), raw
+    for prev, res in itertools.pairwise(levels):
+        factor = res // prev
+        coarse_active = _active_cells(values, cfg.band * h * np.sqrt(3), cfg.dilation)
+        h_new = h / factor
+        new_shape = tuple((n - 1) * factor + 1 for n in shape)
+        up = F.interpolate(torch.from_numpy(values)[None, None], size=new_shape, mode="trilinear", align_corners=True)[
+            0, 0
+        ].numpy()
+        allowed = coarse_active.repeat(factor, 0).repeat(factor, 1).repeat(factor, 2)
+        # First guess: fine cells of active coarse cells that the interpolated field puts near the surface.
+        cells = allowed & _active_cells(up, cfg.fine_band * h_new * np.sqrt(3), 0)
+        done = np.zeros(new_shape, bool)
+        pts_all, sdf_all, raw_all = [], [], []
+        for _ in range(cfg.max_growth):
+            todo = _cell_corner_mask(cells) & ~done
+            if not todo.any():
+                break
+            idx = np.argwhere(todo)
+            pts = lo + idx * h_new
+            sdf, raw = field_fn(pts)
+            up[todo] = sdf
+            done |= todo
+            pts_all.append(pts)
+            sdf_all.append(sdf)
+            raw_all.append(raw)
+            # Grow: every cell that now straddles zero must have all corners from the network.
+            cells = _sign_change_cells(up) & allowed
+        values, shape, h = up, new_shape, h_new
+        evaluated += int(done.sum())
+        last_pts = np.concatenate(pts_all) if pts_all else np.zeros((0, 3))
+        last_sdf = np.concatenate(sdf_all) if sdf_all else np.zeros(0)
+        last_raw = np.concatenate(raw_all) if raw_all and raw_all[0] is not None else None
+    mesh = _marching_cubes(values, lo, h)
+    stats = {
+        "evaluated_points": int(evaluated),
+        "dense_points": int(np.prod(shape)),
+        "seconds": time.perf_counter() - t0,
+        "spacing_m": h,
+    }
+    return Reconstruction(mesh, last_pts.astype(np.float32), np.asarray(last_sdf), last_raw, stats)
+
+
+def reconstruct_dense(field_fn: FieldFn, bounds: np.ndarray, resolution: int = 128) -> Reconstruction:
+    """Reference: one dense pass over the full lattice (what coarse-to-fine avoids). For benchmarks."""
+    t0 = time.perf_counter()
+    lo, h, shape = _lattice(bounds, resolution)
+    grid = np.stack(np.meshgrid(*[np.arange(n) for n in shape], indexing="ij"), -1).reshape(-1, 3)
+    pts = lo + grid * h
+    sdf, raw = field_fn(pts)
+    mesh = _marching_cubes(sdf.reshape(shape).astype(np.float32), lo, h)
+    stats = {"evaluated_points": len(pts), "dense_points": len(pts), "seconds": time.perf_counter() - t0}
+    return Reconstruction(mesh, pts.astype(np.float32), sdf, raw, stats)
+
+
+def _marching_cubes(values: np.ndarray, lo: np.ndarray, h: float) -> trimesh.Trimesh:
+    from skimage.measure import marching_cubes
+
+    if not (values.min() < 0 < values.max()):
+        return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), int))  # no zero crossing: empty mesh
+    # skimage's default "descent" winding gives outward normals (positive volume) for an SDF positive outside.
+    verts, faces, _, _ = marching_cubes(values, level=0.0, spacing=(h, h, h), gradient_direction="descent")
+    return trimesh.Trimesh(verts + lo, faces, process=False)
+
+
+def decoder_outputs(raw: np.ndarray) -> DecoderOutput:
+    """Decode raw (N, 10) outputs (as returned in :class:`Reconstruction`) into sdf/offset/rotation tensors."""
+    from centerart.models.decoder import gram_schmidt
+
+    r = torch.as_tensor(raw)
+    return DecoderOutput(sdf=r[:, 0], offset=r[:, 1:4], rotation=gram_schmidt(r[:, 4:7], r[:, 7:10]), raw=r)
+
+
+def object_bounds(field_fn: FieldFn, bounds: np.ndarray, resolution: int = 32, margin_cells: float = 1.5) -> np.ndarray:
+    """The part of ``bounds`` the object occupies: a ``resolution`` lattice pass keeps the points within half a
+    cell diagonal of the surface or inside, padded by ``margin_cells`` cells. Checkpoint bounds cover the
+    largest training object, so meshing a small object inside them would waste most of the final resolution."""
+    lo, h, shape = _lattice(bounds, resolution)
+    grid = np.stack(np.meshgrid(*[np.arange(n) for n in shape], indexing="ij"), -1).reshape(-1, 3)
+    pts = lo + grid * h
+    sdf, _ = field_fn(pts)
+    occupied = pts[sdf < 0.5 * np.sqrt(3) * h]
+    if len(occupied) == 0:
+        return np.asarray(bounds, np.float64)
+    tight = np.stack([occupied.min(0) - margin_cells * h, occupied.max(0) + margin_cells * h])
+    return np.stack([np.maximum(tight[0], bounds[0]), np.minimum(tight[1], bounds[1])])
+
+
+def reconstruct_object(
+    decoder: SGDFDecoder,
+    code: np.ndarray,
+    joint: float,
+    bounds: np.ndarray,
+    cfg: MeshConfig = MeshConfig(),
+    device: str | torch.device = "cpu",
+) -> Reconstruction:
+    """Mesh (and final-level network outputs) of one object at normalized joint code ``joint``, meshed inside
+    the object's own extent (:func:`object_bounds`) within ``bounds``."""
+    field_fn = decoder_field(decoder, code, joint, cfg.chunk, device)
+    t0 = time.perf_counter()
+    tight = (
+        object_bounds(field_fn, np.asarray(bounds, np.float64), cfg.coarse_resolution * 2)
+        if cfg.tight_bounds
+        else bounds
+    )
+    t_bounds = time.perf_counter() - t0
+    rec = reconstruct(field_fn, tight, cfg)
+    if cfg.tight_bounds:
+        rec.stats["seconds"] += t_bounds
+        rec.stats["evaluated_points"] += int(np.prod(_lattice(bounds, cfg.coarse_resolution * 2)[2]))
+    rec.stats["bounds"] = np.asarray(tight).tolist()
+    return rec

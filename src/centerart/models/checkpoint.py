@@ -1,0 +1,133 @@
+"""Decoder checkpoints: one self-contained ``.pt`` file with everything later stages need.
+
+Contents (a plain dict, loadable with ``torch.load(weights_only=True)``):
+
+- ``format``: ``"centerart-sgdf-decoder"``, ``version``: 1;
+- ``decoder_config``: :class:`~centerart.models.decoder.DecoderConfig` as a dict;
+- ``state_dict``: the decoder weights;
+- ``object_ids`` (list of str) and ``codes`` (K, code_dim) float32: the trained shape code of every training
+  object (one code per object, shared by all its joint states);
+- ``bounds`` (2, 3): the axis-aligned box (object canonical frame, m) of the training samples' surface points,
+  padded; reconstruction evaluates the network inside it;
+- ``split``: which objects/states were held out for validation; ``train_config``: the training config;
+  ``metrics``: final validation numbers; ``code_version``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from centerart.errors import CenterArtError
+from centerart.models.decoder import DecoderConfig, SGDFDecoder
+
+FORMAT = "centerart-sgdf-decoder"
+VERSION = 1
+WEIGHTS_DIR = Path(__file__).resolve().parent.parent / "weights"
+DEFAULT_CHECKPOINT_NAME = "sgdf_small.pt"
+
+
+@dataclass
+class LoadedDecoder:
+    decoder: SGDFDecoder
+    codes: dict[str, np.ndarray]
+    bounds: np.ndarray
+    path: Path
+    meta: dict = field(default_factory=dict, repr=False)
+
+    def code(self, object_id: str) -> np.ndarray:
+        if object_id not in self.codes:
+            raise CenterArtError(
+                f"{self.path}: object {object_id!r} has no trained shape code "
+                f"(known: {', '.join(sorted(self.codes)[:8])}{', ...' if len(self.codes) > 8 else ''}); "
+                "fit one with centerart.inference.code_fitting"
+            )
+        return self.codes[object_id]
+
+
+def save_checkpoint(
+    path: Path,
+    decoder: SGDFDecoder,
+    object_ids: list[str],
+    codes: torch.Tensor | np.ndarray,
+    bounds: np.ndarray,
+    split: dict,
+    train_config: dict,
+    metrics: dict | None = None,
+) -> Path:
+    import io
+
+    from centerart.utils.atomic import atomic_write_bytes
+    from centerart.utils.manifest import code_version
+
+    blob = {
+        "format": FORMAT,
+        "version": VERSION,
+        "decoder_config": decoder.config.to_dict(),
+        "state_dict": {k: v.detach().cpu().clone() for k, v in decoder.state_dict().items()},
+        "object_ids": list(object_ids),
+        "codes": torch.as_tensor(np.asarray(codes, np.float32)),
+        "bounds": torch.as_tensor(np.asarray(bounds, np.float32)),
+        "split": split,
+        "train_config": train_config,
+        "metrics": metrics or {},
+        "code_version": code_version(),
+    }
+    buf = io.BytesIO()
+    torch.save(blob, buf)
+    atomic_write_bytes(Path(path), buf.getvalue())
+    return Path(path)
+
+
+def _read(path: Path) -> dict:
+    path = Path(path)
+    if not path.is_file():
+        raise CenterArtError(f"{path}: checkpoint file not found")
+    try:
+        blob = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as err:  # torch raises many types for corrupt/foreign files
+        raise CenterArtError(f"{path}: not a readable torch checkpoint ({type(err).__name__}: {err})") from None
+    if not isinstance(blob, dict) or blob.get("format") != FORMAT:
+        raise CenterArtError(f"{path}: not a centerart decoder checkpoint (expected format {FORMAT!r})")
+    if blob.get("version") != VERSION:
+        raise CenterArtError(f"{path}: checkpoint version {blob.get('version')} unsupported (expected {VERSION})")
+    return blob
+
+
+def load_shape_codes(path: Path) -> dict[str, np.ndarray]:
+    """The trained shape code (code_dim,) float32 of every training object, by object id."""
+    blob = _read(path)
+    codes = blob["codes"].numpy()
+    return {oid: codes[i].copy() for i, oid in enumerate(blob["object_ids"])}
+
+
+def load_decoder(path: Path | None = None, device: str | torch.device = "cpu") -> LoadedDecoder:
+    """The decoder (eval mode), its shape codes and bounds. ``path=None``: :func:`default_checkpoint`."""
+    path = Path(path) if path is not None else default_checkpoint()
+    blob = _read(path)
+    try:
+        decoder = SGDFDecoder(DecoderConfig.from_dict(blob["decoder_config"]))
+        decoder.load_state_dict(blob["state_dict"])
+    except (TypeError, ValueError, RuntimeError, KeyError) as err:
+        raise CenterArtError(f"{path}: decoder weights do not match its config ({err})") from None
+    decoder.eval().to(device)
+    meta = {k: blob.get(k) for k in ("split", "train_config", "metrics", "code_version")}
+    codes = blob["codes"].numpy()
+    return LoadedDecoder(
+        decoder=decoder,
+        codes={oid: codes[i].copy() for i, oid in enumerate(blob["object_ids"])},
+        bounds=blob["bounds"].numpy().astype(np.float64),
+        path=path,
+        meta=meta,
+    )
+
+
+def default_checkpoint() -> Path:
+    """The shipped ``small`` decoder checkpoint (package data, ``centerart/weights/sgdf_small.pt``)."""
+    path = WEIGHTS_DIR / DEFAULT_CHECKPOINT_NAME
+    if not path.is_file():
+        raise CenterArtError(f"{path}: the shipped decoder checkpoint is missing (reinstall the package)")
+    return path

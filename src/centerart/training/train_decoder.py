@@ -1,0 +1,182 @@
+"""``centerart train decoder``: auto-decoder training of the SGDF decoder on SDF sample files.
+
+Writes to ``--out``::
+
+    OUT/decoder.pt        the exported checkpoint (models/checkpoint.py format: weights, config, shape codes)
+    OUT/config.json       this command's config (preset resolved into the decoder config)
+    OUT/split.json        held-out objects and states
+    OUT/metrics.json      final validation metrics
+    OUT/logs/csv/...      per-step/epoch metrics (CSV) and OUT/logs/tensorboard/... (TensorBoard)
+    OUT/lightning/last.ckpt   Lightning checkpoint (rerunning the same command resumes from it)
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import torch
+
+from centerart.errors import CenterArtError
+from centerart.inference.code_fitting import CodeFitConfig
+from centerart.models.decoder import PRESETS, DecoderConfig
+from centerart.models.losses import GraspWeighting, LossConfig
+from centerart.utils.atomic import atomic_write_json
+
+
+@dataclass
+class TrainDecoderConfig:
+    data: Path
+    """Folder of SDF sample files (``centerart sdf generate`` output)."""
+    out: Path
+    """Output folder (checkpoint, config, logs)."""
+    preset: Literal["tiny", "small", "paper"] = "small"
+    """Decoder size: tiny (tests), small (CPU), paper (8x512, weight norm, dropout 0.2)."""
+    epochs: int = 30
+    seed: int = 0
+    batch_items: int = 8
+    """(object, state) items per step."""
+    points_per_item: int = 2048
+    """Points drawn per item and step."""
+    min_items_per_epoch: int = 256
+    """An epoch draws at least this many items (small datasets repeat their items)."""
+    max_points_per_state: int = 40000
+    """Points of each state kept in memory (a seeded random subset)."""
+    lr_decoder: float = 5e-4
+    lr_codes: float = 1e-3
+    grasp_weighting: GraspWeighting = "label"
+    """Weighting of the grasp term: none | label (distance to nearest label) | surface (|sdf|)."""
+    sdf_weight: float = 10.0
+    heldout_object_fraction: float = 0.15
+    heldout_states_per_object: int = 1
+    val_every: int = 10
+    """Validate every N epochs (held-out objects need a code fit, which costs time)."""
+    val_code_fit_steps: int = 100
+    accelerator: Literal["auto", "cpu", "gpu"] = "auto"
+    threads: int = 0
+    """torch CPU threads (0: torch default)."""
+    resume: bool = True
+    """Resume from OUT/lightning/last.ckpt when it exists."""
+    progress: bool = True
+    decoder_overrides: dict[str, int | float | bool] = field(default_factory=dict)
+    """Override preset fields, e.g. width/depth (Python API; the CLI takes the presets)."""
+
+    def decoder_config(self) -> DecoderConfig:
+        from dataclasses import replace
+
+        return replace(PRESETS[self.preset], **self.decoder_overrides)
+
+    def loss_config(self) -> LossConfig:
+        return LossConfig(grasp_weighting=self.grasp_weighting, sdf_weight=self.sdf_weight)
+
+
+def train_decoder(cfg: TrainDecoderConfig) -> dict:
+    import lightning as L
+    from lightning.pytorch.callbacks import ModelCheckpoint, TQDMProgressBar
+    from lightning.pytorch.loggers import CSVLogger, TensorBoardLogger
+    from torch.utils.data import DataLoader
+
+    from centerart.models.checkpoint import save_checkpoint
+    from centerart.training.decoder_data import PointBatchDataset, load_states, make_split, surface_bounds
+    from centerart.training.decoder_module import DecoderModule
+
+    if not Path(cfg.data).is_dir():
+        raise CenterArtError(f"{cfg.data}: SDF data folder not found")
+    if cfg.threads > 0:
+        torch.set_num_threads(cfg.threads)
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    L.seed_everything(cfg.seed, workers=True, verbose=False)
+
+    states = load_states(cfg.data, cfg.max_points_per_state, cfg.seed, progress=cfg.progress)
+    split = make_split(states, cfg.seed, cfg.heldout_object_fraction, cfg.heldout_states_per_object)
+    roles = {(s.object_id, s.state_index): split.role(s.object_id, s.state_index) for s in states}
+    train_states = [s for s in states if roles[(s.object_id, s.state_index)] == "train"]
+    val_states = [s for s in states if roles[(s.object_id, s.state_index)] == "heldout_state"]
+    obj_states = [s for s in states if roles[(s.object_id, s.state_index)] == "heldout_object"]
+    if not train_states:
+        raise CenterArtError(f"{cfg.data}: no training states left after the validation split")
+    code_index = {o: i for i, o in enumerate(split.train_objects)}
+    bounds = surface_bounds(states)
+
+    dcfg = cfg.decoder_config()
+    lcfg = cfg.loss_config()
+    atomic_write_json(out / "config.json", {**asdict(cfg), "decoder": dcfg.to_dict(), "loss": asdict(lcfg)})
+    atomic_write_json(out / "split.json", split.to_dict())
+
+    module = DecoderModule(
+        dcfg,
+        lcfg,
+        split.train_objects,
+        cfg.lr_decoder,
+        cfg.lr_codes,
+        cfg.epochs,
+        heldout_object_states=obj_states,
+        code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, seed=cfg.seed),
+    )
+    gen = torch.Generator().manual_seed(cfg.seed)
+    train_loader = DataLoader(
+        PointBatchDataset(train_states, code_index, cfg.points_per_item, cfg.min_items_per_epoch),
+        batch_size=cfg.batch_items,
+        shuffle=True,
+        generator=gen,
+        drop_last=True,
+    )
+    val_loader = (
+        DataLoader(PointBatchDataset(val_states, code_index, cfg.points_per_item), batch_size=cfg.batch_items)
+        if val_states
+        else None
+    )
+    loggers = [CSVLogger(out / "logs", name="csv"), TensorBoardLogger(out / "logs", name="tensorboard")]
+    ckpt_cb = ModelCheckpoint(
+        dirpath=out / "lightning", save_last=True, save_top_k=1, every_n_epochs=cfg.val_every
+    )  # no monitor: keeps the newest epoch checkpoint; last.ckpt is what a rerun resumes from
+    trainer = L.Trainer(
+        max_epochs=cfg.epochs,
+        accelerator=cfg.accelerator,
+        devices=1,
+        logger=loggers,
+        callbacks=[ckpt_cb, TQDMProgressBar(refresh_rate=10)] if cfg.progress else [ckpt_cb],
+        enable_progress_bar=cfg.progress,
+        check_val_every_n_epoch=cfg.val_every,
+        num_sanity_val_steps=0,
+        inference_mode=False,  # held-out-object code fitting needs autograd during validation
+        log_every_n_steps=10,
+        enable_model_summary=False,
+        deterministic=False,
+    )
+    last = out / "lightning" / "last.ckpt"
+    t0 = time.perf_counter()
+    trainer.fit(
+        module,
+        train_loader,
+        val_loader,
+        ckpt_path=str(last) if cfg.resume and last.is_file() else None,
+    )
+    seconds = time.perf_counter() - t0
+    metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
+    if val_states:
+        # Final numbers with the final weights (the last in-loop validation may be up to val_every epochs old).
+        trainer.validate(module, val_loader, verbose=False)
+        metrics.update({k: float(v) for k, v in trainer.callback_metrics.items() if k.startswith("val")})
+    elif obj_states:
+        metrics.update({f"val_object/{k}": v for k, v in module.heldout_object_metrics().items()})
+    points_seen = trainer.global_step * cfg.batch_items * cfg.points_per_item
+    metrics["train_seconds"] = seconds
+    metrics["train_points_per_second"] = points_seen / max(seconds, 1e-9)
+    module.decoder.cpu()
+    path = save_checkpoint(
+        out / "decoder.pt",
+        module.decoder,
+        split.train_objects,
+        module.code_array(),
+        bounds,
+        split.to_dict(),
+        json.loads(json.dumps({**asdict(cfg), "loss": asdict(lcfg)}, default=str)),
+        metrics,
+    )
+    atomic_write_json(out / "metrics.json", metrics)
+    return {"checkpoint": path, "metrics": metrics, "split": split}
