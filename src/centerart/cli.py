@@ -57,6 +57,39 @@ def _objects_show_run():
     return lambda cfg: print(f"wrote {show_objects(cfg)}")
 
 
+def _scenes_generate():
+    from centerart.scenes.dataset import GenerateScenesConfig
+
+    return GenerateScenesConfig
+
+
+def _scenes_generate_run():
+    from centerart.scenes.dataset import generate_scenes
+
+    def run(cfg):
+        result = generate_scenes(cfg)
+        c = result["counts"]
+        print(
+            f"{c['scenes']} scenes, {c['images']} images from {c['objects_available']} objects, "
+            f"{c['rejected_layouts']} layouts rejected by the collision check"
+        )
+        print(f"wrote {Path(cfg.out) / 'manifest.json'}")
+
+    return run
+
+
+def _scenes_show():
+    from centerart.viz.scenes_sheet import ShowScenesConfig
+
+    return ShowScenesConfig
+
+
+def _scenes_show_run():
+    from centerart.viz.scenes_sheet import show_scenes
+
+    return lambda cfg: print(f"wrote {show_scenes(cfg)}")
+
+
 def _demo():
     from centerart.demo import DemoConfig
 
@@ -77,6 +110,14 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "generate procedural articulated objects (PartNet-Mobility layout)",
         ),
         "show": Command(_objects_show, _objects_show_run, "contact sheet of objects at closed/half/open states"),
+    },
+    "scenes": {
+        "generate": Command(
+            _scenes_generate,
+            _scenes_generate_run,
+            "render kitchen/single scenes: RGB, true + realistic depth, masks, encoder labels",
+        ),
+        "show": Command(_scenes_show, _scenes_show_run, "contact sheet of rendered scenes with their labels"),
     },
     "demo": {"": Command(_demo, _demo_run, "the main job on its built-in default (see README quick start)")},
 }
