@@ -174,7 +174,7 @@ def render_scene_views(
     save_ir: bool = True,
 ) -> list[dict]:
     """Render every view of a built scene into ``scene_dir/views``; returns per-view summaries."""
-    from centerart.scenes.depth_noise import analytic_depth, stereo_depth, to_ir_uint8
+    from centerart.scenes.depth_noise import analytic_depth, stereo_depth, stereo_occlusion, to_ir_uint8
     from centerart.scenes.labels import view_labels
 
     summaries = []
@@ -189,7 +189,8 @@ def render_scene_views(
         if depth_mode == "stereo":
             left, right = to_ir_uint8(images.ir_left, rng), to_ir_uint8(images.ir_right, rng)
             st = scene.stereo
-            realistic = stereo_depth(left, right, K, st.baseline_m, st.left_offset_m)
+            occluded = stereo_occlusion(images.ir_left_depth, images.ir_right_depth, K, st.baseline_m)
+            realistic = stereo_depth(left, right, K, st.baseline_m, st.left_offset_m, occluded=occluded)
             if save_ir:
                 _write_png(view_dir / "ir_left.png", left)
                 _write_png(view_dir / "ir_right.png", right)

@@ -86,6 +86,25 @@ def register_depth(depth_src: np.ndarray, K: np.ndarray, dst_T_src: np.ndarray) 
     return out.reshape(h, w)
 
 
+def stereo_occlusion(
+    depth_left: np.ndarray, depth_right: np.ndarray, K: np.ndarray, baseline: float, tolerance: float = 0.02
+) -> np.ndarray:
+    """Pixels of the left IR image whose surface point is hidden from the right IR camera (True = occluded).
+
+    Uses the true depth seen by each camera of the rectified pair: the left pixel (u, v) at depth z appears in the
+    right image at u - f b / z; it is occluded when the right camera sees something nearer there.
+    """
+    h, w = depth_left.shape
+    v, u = np.nonzero(depth_left > 0)
+    z = depth_left[v, u]
+    ur = np.round(u - K[0, 0] * baseline / z).astype(np.int64)
+    inside = (ur >= 0) & (ur < w)
+    occluded = np.zeros((h, w), bool)
+    zr = depth_right[v[inside], ur[inside]]
+    occluded[v[inside], u[inside]] = (zr > 0) & (zr < z[inside] * (1.0 - tolerance))
+    return occluded
+
+
 def stereo_depth(
     ir_left: np.ndarray,
     ir_right: np.ndarray,
@@ -94,14 +113,21 @@ def stereo_depth(
     left_offset: float,
     min_depth: float = 0.45,
     max_depth: float = 6.0,
+    occluded: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Depth (float32 m, 0 = hole) in the RGB frame from a rectified uint8 IR pair."""
+    """Depth (float32 m, 0 = hole) in the RGB frame from a rectified uint8 IR pair.
+
+    ``occluded`` (left-image pixels hidden from the right camera, :func:`stereo_occlusion`) are invalidated as the
+    sensor's left-right consistency check does; SGBM alone tends to fill them with the background's disparity.
+    """
     n_disp = num_disparities(K[0, 0], baseline, min_depth)
     disp = sgbm_disparity(ir_left, ir_right, n_disp)
     depth = np.zeros_like(disp)
     ok = disp > 0.5
     depth[ok] = K[0, 0] * baseline / disp[ok]
     depth[(depth < min_depth) | (depth > max_depth)] = 0.0
+    if occluded is not None:
+        depth[cv2.dilate(occluded.astype(np.uint8), np.ones((1, 3), np.uint8)).astype(bool)] = 0.0
     rgb_T_left = np.eye(4)
     rgb_T_left[0, 3] = left_offset
     return register_depth(depth, K, rgb_T_left)

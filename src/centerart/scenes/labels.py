@@ -45,7 +45,9 @@ def project_silhouette(
     # Clip absurdly far vertices (grazing triangles) so int32 fixed point does not overflow.
     lim = (1 << 30) >> shift
     poly = np.clip(poly, -lim, lim)
-    cv2.fillPoly(mask, list(poly), 1, lineType=cv2.LINE_8, shift=shift)
+    # One call per triangle: fillPoly on a list of polygons would apply an even-odd rule to overlapping triangles.
+    for tri in poly:
+        cv2.fillConvexPoly(mask, tri, 1, lineType=cv2.LINE_8, shift=shift)
     return mask.astype(bool)
 
 

@@ -292,7 +292,6 @@ def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple
         width, depth, height = rng.uniform(0.6, 0.9), rng.uniform(0.55, 0.62), rng.uniform(0.84, 0.88)
         cabinet = (under_start, under_start + width, depth, height)
         y = under_start + width + rng.uniform(*NEIGHBOUR_GAP_M)
-    under_end = y
     for entry in tail:
         obj, q, held = _load(entry, rng)
         row.append(_stand(obj, q, held, entry, rng, y, 0.0, "floor"))

@@ -42,6 +42,8 @@ class ViewImages:
     links: np.ndarray  # (H, W) uint16: 0 background/room, else a link id (see SceneRenderer.link_ids)
     ir_left: np.ndarray | None = None  # (H, W) float32 in 0..1 (IR camera colour)
     ir_right: np.ndarray | None = None
+    ir_left_depth: np.ndarray | None = None  # (H, W) float32 true depth seen by each IR camera
+    ir_right_depth: np.ndarray | None = None
 
 
 def uv_mesh(mesh: trimesh.Trimesh, scale_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -298,6 +300,9 @@ class SceneRenderer:
             self.cam_ir_r.take_picture()
             images.ir_left = self.cam_ir_l.get_picture("Color")[..., :3].mean(-1)
             images.ir_right = self.cam_ir_r.get_picture("Color")[..., :3].mean(-1)
+            for cam, attr in ((self.cam_ir_l, "ir_left_depth"), (self.cam_ir_r, "ir_right_depth")):
+                p = cam.get_picture("Position")
+                setattr(images, attr, np.where(p[..., 3] < 1.0, -p[..., 2], 0.0).astype(np.float32))
             self.projector.color = [0.0, 0.0, 0.0]
         return images
 

@@ -90,7 +90,7 @@ def masks_image(rgb: np.ndarray, instances: np.ndarray, labels: dict) -> np.ndar
         img[m] = (0.35 * rgb[m] + 0.65 * PALETTE[(k - 1) % len(PALETTE)]).astype(np.uint8)
     scale = img.shape[1] / 640
     for obj in labels["objects"]:
-        x0, y0, x1, y1 = obj["bbox_xyxy"]
+        x0, y0, _x1, y1 = obj["bbox_xyxy"]
         j = obj["joint"]
         text = f"{obj['category'][:10]} q={j['state']:.2f}{j['unit']} vis={obj['visible_fraction']:.2f}"
         cv2.putText(
@@ -133,6 +133,6 @@ def show_scenes(cfg: ShowScenesConfig) -> Path:
         tiles.append(labelled(masks_image(v.rgb, v.instances, v.labels), f"{len(v.labels['objects'])} instances"))
         tiles.append(labelled(heatmap_image(v.rgb, v.heatmap), "centre heatmap"))
         h, w = v.rgb.shape[:2]
-        size = (cfg.tile_width, int(round(cfg.tile_width * h / w)))
+        size = (cfg.tile_width, round(cfg.tile_width * h / w))
         rows.append([cv2.resize(t, size, interpolation=cv2.INTER_AREA) for t in tiles])
     return save_png(grid(rows), cfg.out)
