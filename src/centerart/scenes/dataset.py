@@ -49,6 +49,7 @@ from centerart.utils.seeding import item_rng
 MAX_LAYOUT_ATTEMPTS = 10
 DEPTH_SCALE_MM = 1000.0
 HEATMAP_SCALE = 65535.0
+DEFAULT_RADIUS_M = {"single": (1.0, 2.5), "kitchen": (1.5, 3.0)}
 
 
 @dataclass
@@ -73,8 +74,8 @@ class GenerateScenesConfig:
     shader: Literal["default", "rt"] = "default"
     """default: rasteriser; rt: path-traced RGB (slow on CPU, noisy without a GPU denoiser)."""
     rt_samples_per_pixel: int = 4
-    radius_m: tuple[float, float] = (1.0, 2.5)
-    """Camera distance range from the point of interest."""
+    radius_m: tuple[float, float] | None = None
+    """Camera distance range (m) from the point of interest; default 1.0-2.5 (single), 1.5-3.0 (kitchen)."""
     elevation_deg: tuple[float, float] = (10.0, 40.0)
     azimuth_deg: tuple[float, float] = (-40.0, 40.0)
     """Azimuth measured from straight in front of the wall (+x) towards +y."""
@@ -136,7 +137,8 @@ def sample_checked_scene(
 ) -> tuple[SceneDescription, list[ArticulatedObject], dict]:
     """Draw scene ``index`` until its layout passes the exact collision check."""
     w, h, K = intrinsics(cfg.intrinsics)
-    shell = ShellRanges(tuple(cfg.radius_m), tuple(cfg.elevation_deg), tuple(cfg.azimuth_deg))
+    radius = cfg.radius_m or DEFAULT_RADIUS_M[cfg.layout]
+    shell = ShellRanges(tuple(radius), tuple(cfg.elevation_deg), tuple(cfg.azimuth_deg))
     failures = []
     for attempt in range(MAX_LAYOUT_ATTEMPTS):
         rng = item_rng(cfg.seed, "scene", index, attempt)

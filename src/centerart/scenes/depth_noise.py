@@ -59,7 +59,7 @@ def sgbm_disparity(left: np.ndarray, right: np.ndarray, n_disp: int) -> np.ndarr
         P1=8 * SGBM_BLOCK**2,
         P2=32 * SGBM_BLOCK**2,
         disp12MaxDiff=1,
-        uniquenessRatio=10,
+        uniquenessRatio=15,
         speckleWindowSize=100,
         speckleRange=2,
         mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,

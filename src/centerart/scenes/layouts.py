@@ -179,7 +179,7 @@ def room_materials(rng: np.random.Generator) -> dict[str, MaterialSpec]:
 def sample_lights(rng: np.random.Generator, center: np.ndarray, width: float) -> tuple[list[float], list[LightSpec]]:
     """Ambient level plus 1-2 ceiling point lights and one window-like directional light, random colour temperature
     and intensity."""
-    ambient = float(rng.uniform(0.15, 0.35))
+    ambient = float(rng.uniform(0.25, 0.45))
     warm = rng.uniform(-0.08, 0.08)
     ambient_rgb = [ambient * (1 + warm), ambient, ambient * (1 - warm)]
     lights = []
@@ -299,7 +299,8 @@ def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple
 
     # Counter top over the under-counter objects (or the cabinet), flush with their swept boxes' y extent.
     heights = [_world_swept(p)[1, 2] for p in under_rows] or [cabinet[3]]
-    depths = [_world_swept(p)[1, 0] for p in under_rows] or [cabinet[2]]
+    # The counter's depth follows the closed fronts: open doors and drawers swing out below it.
+    depths = [p.obj.bounds()[1, 0] + p.world_T_object[0, 3] for p in under_rows] or [cabinet[2]]
     gap_below = rng.uniform(0.005, 0.02)
     thickness = rng.uniform(*COUNTER_THICKNESS_M)
     bottom = max(max(heights) + gap_below, 0.86)
@@ -362,7 +363,8 @@ def sample_single(entries: list[AssetEntry], rng: np.random.Generator) -> tuple[
         swept = swept_bounds(obj, q)
         width = swept[1, 1] - swept[0, 1] + rng.uniform(0.3, 0.8)
         depth, height, thickness = rng.uniform(0.55, 0.62), rng.uniform(0.84, 0.88), rng.uniform(0.03, 0.05)
-        front = max(depth, swept[1, 0] - swept[0, 0]) + 0.03
+        closed = obj.bounds()
+        front = max(depth, closed[1, 0] - closed[0, 0] + WALL_GAP_M[1]) + 0.03
         y0 = -width / 2
         boxes.append(
             _box(
@@ -478,7 +480,7 @@ def sample_scene(
     cameras = []
     for v in range(views):
         # Look at one object of the row (or the row centre), at about counter height.
-        if rng.random() < 0.3 or len(row) == 1:
+        if rng.random() < 0.4 or len(row) == 1:
             target = center.copy() if len(row) > 1 else (_world_swept(row[0]).mean(0))
         else:
             target = _world_swept(row[int(rng.integers(len(row)))]).mean(0)

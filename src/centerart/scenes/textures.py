@@ -75,13 +75,14 @@ def make_texture(kind: str, color: tuple[float, ...], seed: int, size: int = 256
     c = np.asarray(color[:3], dtype=float)
     if kind == "wood":
         # Growth rings: a periodic distortion field bends parallel stripes; fine fibres run along the grain.
-        warp = periodic_noise(rng, size, (2, 4), octaves=3)
+        warp = periodic_noise(rng, size, (4, 1), octaves=2)
         y = np.arange(size)[:, None] / size
-        rings_per_tile = int(rng.integers(6, 12))
-        phase = 2 * np.pi * (rings_per_tile * y + 1.5 * warp)
-        rings = 0.5 + 0.5 * np.sin(phase) ** 3
-        fibres = periodic_noise(rng, size, (64, 4), octaves=2)
-        value = 0.72 + 0.22 * rings + 0.12 * (fibres - 0.5)
+        rings_per_tile = int(rng.integers(10, 20))
+        phase = 2 * np.pi * (rings_per_tile * y + 0.6 * warp)
+        rings = (0.5 + 0.5 * np.sin(phase)) ** 4
+        fibres = periodic_noise(rng, size, (96, 2), octaves=2)
+        planks = periodic_noise(rng, size, (1, 4))  # tone varies slowly along the grain
+        value = 0.8 + 0.14 * rings + 0.1 * (fibres - 0.5) + 0.1 * (planks - 0.5)
         img = _shade(c, value)
     elif kind == "painted":
         # Paint: nearly flat, low-frequency roller unevenness plus a faint orange-peel speckle.
