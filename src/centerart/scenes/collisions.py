@@ -1,6 +1,7 @@
 """Exact interpenetration checks for a scene description (manifold3d booleans on the objects' meshes).
 
-An object is checked at every state in ``check_states`` of its target joint (closed to fully open, plus the state
+Generated objects are checked with their exact part meshes; real PartNet-Mobility objects (open triangle soups)
+with the union of their parts' convex hulls, which is conservative. An object is checked at every state in ``check_states`` of its target joint (closed to fully open, plus the state
 in the scene) against every other object at its scene state and against every room box (floor, walls, counters).
 So the scene as rendered has no overlap, and opening any door or drawer fully does not hit a neighbour, the wall,
 the floor or the counter. Overlaps smaller than :data:`PENETRATION_TOL_M3` (boolean noise of touching faces)
@@ -34,8 +35,22 @@ def object_solid(obj: ArticulatedObject, q: float, world_T_object: np.ndarray) -
     parts = obj.parts(q)
     if all(p.mesh.is_watertight for p in parts):
         mesh = union([p.mesh for p in parts])
-    else:  # real PartNet-Mobility soups
-        mesh = obj.watertight_mesh(q, pitch=0.01)
+    else:
+        # Real PartNet-Mobility meshes are open triangle soups: use the union of each part's convex hull, a closed
+        # solid that contains the part (conservative: it can only report more overlap, never less), and about
+        # 100x faster than voxel remeshing the whole object.
+        hulls = []
+        for p in parts:
+            try:
+                hull = p.mesh.convex_hull
+            except Exception:  # degenerate (flat) part: it has no volume to overlap with
+                continue
+            with np.errstate(all="ignore"):
+                usable = hull.is_watertight and hull.volume > 1e-12
+            if usable:
+                hulls.append(to_manifold(hull))
+        solid = manifold3d.Manifold.batch_boolean(hulls, manifold3d.OpType.Add)
+        return solid.transform(np.asarray(world_T_object, float)[:3, :4])
     mesh = mesh.copy()
     mesh.apply_transform(world_T_object)
     return to_manifold(mesh)

@@ -42,7 +42,7 @@ from centerart.scenes.description import SceneDescription
 from centerart.scenes.layouts import AssetEntry, sample_scene
 from centerart.scenes.textures import make_texture, write_texture
 from centerart.utils.atomic import atomic_directory, atomic_write_json, remove_stale_temporaries
-from centerart.utils.manifest import code_version, write_manifest
+from centerart.utils.manifest import write_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng
 
@@ -278,7 +278,6 @@ def generate_scenes(cfg: GenerateScenesConfig) -> dict:
             "objects_available": len(entries),
         },
         "wall_seconds_this_run": round(time.perf_counter() - started, 1),
-        "code": code_version(),
         "assets": [asdict(e) for e in entries],
         "scenes": records,
     }

@@ -287,26 +287,40 @@ def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple
         row.append(_stand(obj, q, held, entry, rng, y, 0.0, "floor"))
         y = _world_swept(row[-1])[1, 1] + rng.uniform(*NEIGHBOUR_GAP_M)
     under_rows = [p for p in row if p.support == "floor" and not p.entry.tall]
-    cabinet = None
+    # The microwave needs a counter at least as long as its swept width; a plain base cabinet extends the
+    # under-counter segment (or stands in for it) when it is too short.
+    micro_placed = None
+    if use_micro:
+        entry = micro[int(rng.integers(len(micro)))]
+        obj, q, held = _load(entry, rng)
+        micro_placed = (entry, obj, q, held, swept_bounds(obj, q))
+    needed = 0.0 if micro_placed is None else micro_placed[4][1, 1] - micro_placed[4][0, 1] + 0.04
     if not under_rows:
-        width, depth, height = rng.uniform(0.6, 0.9), rng.uniform(0.55, 0.62), rng.uniform(0.84, 0.88)
-        cabinet = (under_start, under_start + width, depth, height)
-        y = under_start + width + rng.uniform(*NEIGHBOUR_GAP_M)
+        needed = max(needed, rng.uniform(0.6, 0.9))
+    span = (max(_world_swept(p)[1, 1] for p in under_rows) - under_start) if under_rows else 0.0
+    cabinet = None
+    if span < needed:
+        c0 = y if under_rows else under_start
+        width = max(needed - span, 0.3)
+        depth, height = rng.uniform(0.55, 0.62), rng.uniform(0.84, 0.88)
+        cabinet = (c0, c0 + width, depth, height)
+        y = c0 + width + rng.uniform(*NEIGHBOUR_GAP_M)
     for entry in tail:
         obj, q, held = _load(entry, rng)
         row.append(_stand(obj, q, held, entry, rng, y, 0.0, "floor"))
         y = _world_swept(row[-1])[1, 1]
 
     # Counter top over the under-counter objects (or the cabinet), flush with their swept boxes' y extent.
-    heights = [_world_swept(p)[1, 2] for p in under_rows] or [cabinet[3]]
+    heights = [_world_swept(p)[1, 2] for p in under_rows] + ([cabinet[3]] if cabinet else [])
     # The counter's depth follows the closed fronts: open doors and drawers swing out below it.
-    depths = [p.obj.bounds()[1, 0] + p.world_T_object[0, 3] for p in under_rows] or [cabinet[2]]
+    depths = [p.obj.bounds()[1, 0] + p.world_T_object[0, 3] for p in under_rows] + ([cabinet[2]] if cabinet else [])
     gap_below = rng.uniform(0.005, 0.02)
     thickness = rng.uniform(*COUNTER_THICKNESS_M)
     bottom = max(max(heights) + gap_below, 0.86)
     front = max(max(depths), 0.5) + rng.uniform(*COUNTER_OVERHANG_M)
-    y0 = min(_world_swept(p)[0, 1] for p in under_rows) if under_rows else cabinet[0]
-    y1 = max(_world_swept(p)[1, 1] for p in under_rows) if under_rows else cabinet[1]
+    spans = [_world_swept(p)[:, 1] for p in under_rows] + ([np.array(cabinet[:2])] if cabinet else [])
+    y0 = min(float(sp[0]) for sp in spans)
+    y1 = max(float(sp[1]) for sp in spans)
     counter_top = bottom + thickness
     boxes.append(
         _box(
@@ -339,15 +353,11 @@ def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple
         )
     )
 
-    if use_micro:
-        entry = micro[int(rng.integers(len(micro)))]
-        obj, q, held = _load(entry, rng)
-        swept = swept_bounds(obj, q)
-        width = swept[1, 1] - swept[0, 1]
-        free = (y1 - y0) - width
-        if free > 0.02:
-            y_left = y0 + 0.01 + rng.uniform(0, free - 0.02)
-            row.append(_stand(obj, q, held, entry, rng, y_left, counter_top, "counter"))
+    if micro_placed is not None:
+        entry, obj, q, held, swept = micro_placed
+        free = (y1 - y0) - (swept[1, 1] - swept[0, 1])
+        y_left = y0 + 0.01 + rng.uniform(0, max(free - 0.02, 0.0))
+        row.append(_stand(obj, q, held, entry, rng, y_left, counter_top, "counter"))
     _center_row(row, boxes)
     boxes.extend(_room(rng, row, boxes, mats))
     return row, boxes
