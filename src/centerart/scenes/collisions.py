@@ -1,11 +1,11 @@
 """Exact interpenetration checks for a scene description (manifold3d booleans on the objects' meshes).
 
 Generated objects are checked with their exact part meshes; real PartNet-Mobility objects (open triangle soups)
-with the union of their parts' convex hulls, which is conservative. An object is checked at every state in ``check_states`` of its target joint (closed to fully open, plus the state
-in the scene) against every other object at its scene state and against every room box (floor, walls, counters).
-So the scene as rendered has no overlap, and opening any door or drawer fully does not hit a neighbour, the wall,
-the floor or the counter. Overlaps smaller than :data:`PENETRATION_TOL_M3` (boolean noise of touching faces)
-are ignored.
+with the union of their parts' convex hulls, which is conservative. An object is checked at every state in
+``check_states`` of its target joint (closed to fully open, plus the state in the scene) against every other object
+at its scene state and against every room box (floor, walls, counters). So the scene as rendered has no overlap,
+and opening any door or drawer fully does not hit a neighbour, the wall, the floor or the counter. Overlaps smaller
+than :data:`PENETRATION_TOL_M3` (boolean noise of touching faces) are ignored.
 """
 
 from __future__ import annotations
