@@ -236,12 +236,11 @@ class SceneRenderer:
         rig = sapien.Entity()
         rig.name = "camera_rig"
 
+        shader_root = Path(sapien.__file__).parent / "vulkan_shader"
+
         def camera(name, shader, local_y=0.0):
-            cam = (
-                sapien.render.RenderCameraComponent(w, h, shader)
-                if shader
-                else sapien.render.RenderCameraComponent(w, h)
-            )
+            # The component wants a shader folder path, not a name; "" means the process-wide default.
+            cam = sapien.render.RenderCameraComponent(w, h, str(shader_root / shader) if shader else "")
             cam.name = name
             cam.set_perspective_parameters(cam0.near, cam0.far, K[0, 0], K[1, 1], K[0, 2] + 0.5, K[1, 2] + 0.5, K[0, 1])
             cam.local_pose = sapien.Pose([0.0, local_y, 0.0])
