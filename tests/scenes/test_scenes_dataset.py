@@ -113,3 +113,36 @@ def test_textures_are_deterministic_and_tile(kind):
     middle = np.abs(a[:, 63].astype(int) - a[:, 64].astype(int)).mean()
     wrap = np.abs(a[:, 0].astype(int) - a[:, -1].astype(int)).mean()
     assert wrap <= 3 * middle + 3
+
+
+def test_shape_codes_from_decoder_checkpoint(scene_objects, tmp_path, monkeypatch):
+    """With --decoder-checkpoint, each label carries the object's code from load_shape_codes (here a stand-in)."""
+    import sys
+    import types
+
+    ckpt = tmp_path / "decoder.ckpt"
+    ckpt.write_bytes(b"stand-in")
+    codes = {p.name: np.arange(4, dtype=float) + i for i, p in enumerate(sorted(scene_objects.iterdir())) if p.is_dir()}
+    module = types.ModuleType("centerart.models.checkpoint")
+    module.load_shape_codes = lambda path: codes if path == ckpt else {}
+    monkeypatch.setitem(sys.modules, "centerart.models.checkpoint", module)
+    out = tmp_path / "out"
+    cfg = GenerateScenesConfig(
+        objects=scene_objects,
+        out=out,
+        layout="single",
+        count=1,
+        views_per_scene=1,
+        seed=2,
+        depth="true",
+        intrinsics="tiny",
+        radius_m=(1.2, 2.0),
+        workers=1,
+        decoder_checkpoint=ckpt,
+    )
+    generate_scenes(cfg)
+    view = load_view(list_views(out)[0])
+    assert view.depth_realistic is None
+    assert view.labels["objects"]
+    for lab in view.labels["objects"]:
+        assert lab["shape_code"] == codes[lab["object_id"]].tolist()
