@@ -6,19 +6,15 @@ import numpy as np
 import pytest
 import trimesh
 
-from centerart.assets.articulated_object import ArticulatedObject
 from centerart.geometry.transforms import apply_transform, invert_pose
 from centerart.scenes.dataset import list_views, load_view
-from centerart.scenes.description import SceneDescription
+from centerart.scenes.description import SceneDescription, load_scene_object
 from centerart.scenes.labels import heatmap_from_masks, project_silhouette
 
 
 def _scene_objects(view_dir):
     scene = SceneDescription.load(view_dir.parent.parent / "scene.json")
-    objects = [
-        ArticulatedObject.load(o.path, target_joint=o.target_joint, scale=o.scale, held_states=o.held_states)
-        for o in scene.objects
-    ]
+    objects = [load_scene_object(o) for o in scene.objects]
     return scene, objects
 
 

@@ -7,7 +7,8 @@ sensor.
 
 Frames and units: metres, radians. World frame z up; the kitchen's back wall is the plane x = 0 and objects face
 +x (their canonical front). ``world_T_object`` places an object's **canonical frame** (x out of the front, z up,
-origin at the centre of the closed bounding box; :mod:`centerart.assets.canonical_frame`). ``world_T_camera`` is
+origin at the centre of the closed bounding box with the other joints at their lower limits;
+:mod:`centerart.assets.canonical_frame`); load objects with :func:`load_scene_object`. ``world_T_camera`` is
 an OpenCV camera (x right, y down, z forward); ``K`` is its 3x3 intrinsic matrix with pixel centres at integer
 coordinates (OpenCV convention). ``world_T_box`` is the centre of a box whose half extents are ``half_size``.
 """
@@ -212,6 +213,31 @@ def _convert(type_name: str, value):
         if t == f"dict[str, {name}]":
             return {k: _build(klass, v) for k, v in value.items()}
     return value
+
+
+def load_object(
+    path: str | Path, target_joint: str | None = None, scale: float | None = None, held_states: dict | None = None
+):
+    """Load an asset for a scene, in the frame that ``world_T_object`` places.
+
+    That frame is the canonical frame of the asset with its other joints at their *default* held values (lower
+    limits): ``ArticulatedObject.load`` would otherwise centre the frame on the bounding box with the scene's held
+    states, so an opened non-target drawer would shift the object's origin. Pinning the frame keeps poses of the same
+    asset comparable across scenes (and with the decoder's object frame).
+    """
+    from centerart.assets.articulated_object import ArticulatedObject
+
+    obj = ArticulatedObject.load(path, target_joint=target_joint, scale=scale)
+    if held_states and any(abs(obj.held_states[k] - v) > 0 for k, v in held_states.items() if k in obj.held_states):
+        frame = obj.canonical_T_base
+        obj = ArticulatedObject.load(path, target_joint=target_joint, scale=scale, held_states=held_states)
+        obj.canonical_T_base = frame
+    return obj
+
+
+def load_scene_object(spec: ObjectSpec):
+    """The :class:`~centerart.assets.ArticulatedObject` of a scene object (see :func:`load_object`)."""
+    return load_object(spec.path, spec.target_joint, spec.scale, spec.held_states)
 
 
 def pose_list(pose: np.ndarray) -> list[list[float]]:

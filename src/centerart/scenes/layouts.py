@@ -31,6 +31,7 @@ from centerart.scenes.description import (
     ObjectSpec,
     SceneDescription,
     StereoSpec,
+    load_object,
     pose_list,
 )
 
@@ -229,9 +230,7 @@ class _Placed:
 def _load(entry: AssetEntry, rng) -> tuple[ArticulatedObject, float, dict[str, float]]:
     obj = ArticulatedObject.load(entry.path)
     q, held = sample_states(obj, rng)
-    if held != obj.held_states:
-        obj = ArticulatedObject.load(entry.path, held_states=held)
-    return obj, q, held
+    return load_object(entry.path, obj.target_joint, obj.scale, held), q, held
 
 
 def _translation(x, y, z) -> np.ndarray:

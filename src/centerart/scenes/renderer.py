@@ -23,7 +23,7 @@ import trimesh
 
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.errors import CenterArtError
-from centerart.scenes.description import MaterialSpec, SceneDescription
+from centerart.scenes.description import MaterialSpec, SceneDescription, load_scene_object
 from centerart.scenes.textures import make_texture
 
 #: Columns: SAPIEN camera axes (forward, left, up) written in OpenCV camera coordinates.
@@ -128,9 +128,7 @@ class SceneRenderer:
         objects = []
         entity_link: dict[int, tuple[int, str]] = {}
         for k, spec in enumerate(description.objects):
-            obj = ArticulatedObject.load(
-                spec.path, target_joint=spec.target_joint, scale=spec.scale, held_states=spec.held_states
-            )
+            obj = load_scene_object(spec)
             objects.append(obj)
             art = self._add_object(obj, spec)
             for link in art.links:
