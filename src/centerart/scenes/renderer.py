@@ -54,8 +54,8 @@ def uv_mesh(mesh: trimesh.Trimesh, scale_m: float) -> tuple[np.ndarray, np.ndarr
     dominant = np.abs(normals).argmax(1)
     axes = np.array([[1, 2], [0, 2], [0, 1]])[dominant]  # (F, 2): u along the first, v along the second
     uv = np.take_along_axis(tris, np.repeat(axes[:, None, :], 3, 1), axis=2) / max(scale_m, 1e-6)
-    # Wood grain and brush strokes run along v (the texture's rows change with v); for vertical faces let v follow
-    # world up by swapping when the second axis is not z.
+    # Swap to (second, first) axis: on vertical faces u then follows z and v the horizontal axis; the textures'
+    # stripes (wood rings, brush strokes) change with v only, so they run vertically on doors and side panels.
     uv = uv[..., ::-1]
     vertices = tris.reshape(-1, 3).astype(np.float32)
     faces = np.arange(len(vertices), dtype=np.uint32).reshape(-1, 3)
