@@ -60,6 +60,18 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "SDF samples + nearest-grasp targets per (object, joint state)",
         ),
     },
+    "scenes": {
+        "generate": Command(
+            "centerart.scenes.dataset:GenerateScenesConfig",
+            "centerart.commands:scenes_generate",
+            "kitchen / single-object scenes: RGB, true and realistic depth, masks, encoder labels",
+        ),
+        "show": Command(
+            "centerart.viz.scenes_sheet:ShowScenesConfig",
+            "centerart.commands:scenes_show",
+            "contact sheet: RGB | true depth | realistic depth | masks | heatmaps, poses as axes",
+        ),
+    },
     "train": {
         "decoder": Command(
             "centerart.training.train_decoder:TrainDecoderConfig",

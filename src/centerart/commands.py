@@ -63,6 +63,23 @@ def sdf_generate(cfg) -> None:
     print(f"wrote {Path(cfg.out) / 'manifest.json'}")
 
 
+def scenes_generate(cfg) -> None:
+    from centerart.scenes.dataset import generate_scenes
+
+    c = generate_scenes(cfg)["counts"]
+    print(
+        f"{c['scenes']} scenes, {c['images']} images from {c['objects_available']} objects, "
+        f"{c['rejected_layouts']} layouts rejected by the collision check"
+    )
+    print(f"wrote {Path(cfg.out) / 'manifest.json'}")
+
+
+def scenes_show(cfg) -> None:
+    from centerart.viz.scenes_sheet import show_scenes
+
+    print(f"wrote {show_scenes(cfg)}")
+
+
 def demo(cfg) -> None:
     from centerart.demo import run_demo
 

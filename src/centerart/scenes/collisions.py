@@ -1,0 +1,88 @@
+"""Exact interpenetration checks for a scene description (manifold3d booleans on the objects' meshes).
+
+Generated objects are checked with their exact part meshes; real PartNet-Mobility objects (open triangle soups)
+with the union of their parts' convex hulls, which is conservative. An object is checked at every state in
+``check_states`` of its target joint (closed to fully open, plus the state in the scene) against every other object
+at its scene state and against every room box (floor, walls, counters). So the scene as rendered has no overlap,
+and opening any door or drawer fully does not hit a neighbour, the wall, the floor or the counter. Overlaps smaller
+than :data:`PENETRATION_TOL_M3` (boolean noise of touching faces) are ignored.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import manifold3d
+import numpy as np
+import trimesh
+
+from centerart.assets.articulated_object import ArticulatedObject
+from centerart.assets.mesh_ops import to_manifold, union
+from centerart.scenes.description import SceneDescription
+
+PENETRATION_TOL_M3 = 1e-8  # 10 mm^3, as in the object checks
+
+
+@dataclass
+class CollisionReport:
+    ok: bool = True
+    worst_m3: float = 0.0
+    problems: list[str] = field(default_factory=list)
+
+
+def object_solid(obj: ArticulatedObject, q: float, world_T_object: np.ndarray) -> manifold3d.Manifold:
+    """Closed solid of the whole object at target state ``q``, in the world frame."""
+    parts = obj.parts(q)
+    if all(p.mesh.is_watertight for p in parts):
+        mesh = union([p.mesh for p in parts])
+    else:
+        # Real PartNet-Mobility meshes are open triangle soups: use the union of each part's convex hull, a closed
+        # solid that contains the part (conservative: it can only report more overlap, never less), and about
+        # 100x faster than voxel remeshing the whole object.
+        hulls = []
+        for p in parts:
+            try:
+                hull = p.mesh.convex_hull
+            except Exception:  # degenerate (flat) part: it has no volume to overlap with
+                continue
+            with np.errstate(all="ignore"):
+                usable = hull.is_watertight and hull.volume > 1e-12
+            if usable:
+                hulls.append(to_manifold(hull))
+        solid = manifold3d.Manifold.batch_boolean(hulls, manifold3d.OpType.Add)
+        return solid.transform(np.asarray(world_T_object, float)[:3, :4])
+    mesh = mesh.copy()
+    mesh.apply_transform(world_T_object)
+    return to_manifold(mesh)
+
+
+def box_solid(world_T_box: np.ndarray, half_size) -> manifold3d.Manifold:
+    box = trimesh.creation.box(extents=2.0 * np.asarray(half_size, float))
+    box.apply_transform(np.asarray(world_T_box, float))
+    return to_manifold(box)
+
+
+def check_states(obj: ArticulatedObject, q_scene: float, n: int = 5) -> list[float]:
+    lo, hi = obj.joint_range
+    return sorted({*np.linspace(lo, hi, n).tolist(), float(q_scene)})
+
+
+def check_scene(scene: SceneDescription, objects: list[ArticulatedObject], n_states: int = 5) -> CollisionReport:
+    """Exact overlap check of every object (over its range) against the others and the room."""
+    report = CollisionReport()
+    poses = [scene.object_pose(i) for i in range(len(objects))]
+    at_scene = [object_solid(o, s.joint_state, p) for o, s, p in zip(objects, scene.objects, poses, strict=True)]
+    boxes = [(b.name, box_solid(np.asarray(b.world_T_box), b.half_size)) for b in scene.boxes]
+    for i, (obj, spec) in enumerate(zip(objects, scene.objects, strict=True)):
+        for q in check_states(obj, spec.joint_state, n_states):
+            solid = at_scene[i] if q == spec.joint_state else object_solid(obj, q, poses[i])
+            others = [(scene.objects[j].name, at_scene[j]) for j in range(len(objects)) if j != i] + boxes
+            for name, other in others:
+                vol = float((solid ^ other).volume())
+                report.worst_m3 = max(report.worst_m3, vol)
+                if vol > PENETRATION_TOL_M3:
+                    report.ok = False
+                    report.problems.append(
+                        f"{spec.name} ({spec.object_id}) at q={q:.3f} overlaps {name} by {vol * 1e6:.2f} cm^3"
+                    )
+    return report

@@ -1,0 +1,332 @@
+"""``centerart scenes generate``: sample, check, render and label scenes; parallel over scenes, resumable.
+
+On-disk layout (all images PNG; depth in millimetres as uint16, 0 = no measurement)::
+
+    OUT/manifest.json                 config, seed, code version, counts, asset index, timing
+    OUT/scene_000000/scene.json       SceneDescription: the single source of truth (see description.py)
+    OUT/scene_000000/checks.json      exact interpenetration check of the layout (collisions.py)
+    OUT/scene_000000/textures/*.png   procedural textures the scene uses (paths referenced by scene.json)
+    OUT/scene_000000/views/00/
+        rgb.png                       (H, W, 3) uint8
+        depth_true.png                (H, W) uint16 mm, rasterised z-depth in the RGB camera frame
+        depth_realistic.png           (H, W) uint16 mm, stereo (IR pair + SGBM) or analytic noise; 0 = hole
+        ir_left.png, ir_right.png     (H, W) uint8 IR pair with the dot pattern (stereo only)
+        instances.png                 (H, W) uint8: 0 room/background, k + 1 = scene object k
+        links.png                     (H, W) uint16: link ids, see labels.json objects[*].links
+        heatmap.png                   (H, W) uint16 = round(heatmap * 65535), the paper's centre heatmap
+        labels.json                   K, world_T_camera, per visible object: pose, joint, visibility, ...
+
+A scene folder is written atomically (temporary folder, then rename), so a folder that exists is complete and a
+rerun skips it. Scene i is drawn from a generator seeded by (seed, i, attempt) only: results do not depend on the
+number of workers or on which scenes already exist. A layout that fails the exact collision check is redrawn with
+the next attempt (counted in the manifest).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from PIL import Image
+
+from centerart.assets.articulated_object import ArticulatedObject
+from centerart.assets.dataset import list_objects
+from centerart.errors import CenterArtError
+from centerart.scenes.cameras import ShellRanges, intrinsics
+from centerart.scenes.collisions import check_scene
+from centerart.scenes.description import SceneDescription
+from centerart.scenes.layouts import AssetEntry, sample_scene
+from centerart.scenes.textures import make_texture, write_texture
+from centerart.utils.atomic import atomic_directory, atomic_write_json, remove_stale_temporaries
+from centerart.utils.manifest import write_manifest
+from centerart.utils.parallel import parallel_map
+from centerart.utils.seeding import item_rng
+
+MAX_LAYOUT_ATTEMPTS = 10
+DEPTH_SCALE_MM = 1000.0
+HEATMAP_SCALE = 65535.0
+DEFAULT_RADIUS_M = {"single": (1.0, 2.5), "kitchen": (1.5, 3.0)}
+
+
+@dataclass
+class GenerateScenesConfig:
+    """Render scenes of articulated objects (RGB, true and realistic depth, masks, encoder labels)."""
+
+    objects: Path
+    """Folder of object folders (``centerart objects generate`` output or PartNet-Mobility folders)."""
+    out: Path
+    """Output folder (created). Complete scenes already there are kept and skipped (resume)."""
+    layout: Literal["single", "kitchen"] = "kitchen"
+    """single: one object in a room; kitchen: 2-5 objects along a wall under a counter."""
+    count: int = 10
+    """Number of scenes."""
+    views_per_scene: int = 2
+    """Camera views rendered per scene."""
+    seed: int = 0
+    depth: Literal["true", "stereo", "analytic"] = "stereo"
+    """Realistic depth: stereo (IR pair + SGBM), analytic (noise model), or true (no realistic depth)."""
+    intrinsics: Literal["d415", "paper", "tiny"] = "d415"
+    """d415: 640x480 fx=fy=615; paper: 960x512 f=530; tiny: 320x240 (tests)."""
+    shader: Literal["default", "rt"] = "default"
+    """default: rasteriser; rt: path-traced RGB (slow on CPU, noisy without a GPU denoiser)."""
+    rt_samples_per_pixel: int = 4
+    radius_m: tuple[float, float] | None = None
+    """Camera distance range (m) from the point of interest; default 1.0-2.5 (single), 1.5-3.0 (kitchen)."""
+    elevation_deg: tuple[float, float] = (10.0, 40.0)
+    azimuth_deg: tuple[float, float] = (-40.0, 40.0)
+    """Azimuth measured from straight in front of the wall (+x) towards +y."""
+    decoder_checkpoint: Path | None = None
+    """Decoder checkpoint whose shape codes fill each object's ``shape_code`` label (else null)."""
+    save_ir: bool = True
+    """Keep the IR pair images of the stereo sensor."""
+    workers: int | None = None
+    """Parallel worker processes (default: all cores). Each compiles SAPIEN's shaders once (a few seconds)."""
+    ray_address: str | None = None
+    """Ray cluster address (e.g. auto or ray://host:10001) to run scenes on a cluster instead of local processes."""
+
+
+# ---------------------------------------------------------------------------- asset index
+def asset_index(folder: Path) -> list[AssetEntry]:
+    """Every usable object folder under ``folder`` with its category and closed height."""
+    entries = []
+    for path in list_objects(folder):
+        obj = ArticulatedObject.load(path)
+        lo, hi = obj.bounds()
+        entries.append(AssetEntry(obj.object_id, str(path.resolve()), obj.category, float(hi[2] - lo[2])))
+    return entries
+
+
+# ---------------------------------------------------------------------------- per-process state
+_RENDERERS: dict = {}
+_SHAPE_CODES: dict = {}
+
+
+def _renderer(shader: str, spp: int):
+    from centerart.scenes.renderer import SceneRenderer
+
+    key = (shader, spp)
+    if key not in _RENDERERS:
+        _RENDERERS[key] = SceneRenderer(shader, spp)
+    return _RENDERERS[key]
+
+
+def load_decoder_shape_codes(path: Path) -> dict[str, np.ndarray]:
+    """Shape code per object id from a decoder checkpoint (``centerart.models.checkpoint.load_shape_codes``)."""
+    key = str(path)
+    if key not in _SHAPE_CODES:
+        try:
+            from centerart.models.checkpoint import load_shape_codes
+        except ImportError as err:
+            raise CenterArtError(
+                f"--decoder-checkpoint {path}: this installation has no decoder checkpoint reader "
+                f"(centerart.models.checkpoint.load_shape_codes: {err})"
+            ) from None
+        if not Path(path).is_file() and not Path(path).is_dir():
+            raise CenterArtError(f"--decoder-checkpoint {path}: no such file")
+        _SHAPE_CODES[key] = {str(k): np.asarray(v) for k, v in load_shape_codes(Path(path)).items()}
+    return _SHAPE_CODES[key]
+
+
+# ---------------------------------------------------------------------------- one scene
+def sample_checked_scene(
+    cfg: GenerateScenesConfig, index: int, entries: list[AssetEntry]
+) -> tuple[SceneDescription, list[ArticulatedObject], dict]:
+    """Draw scene ``index`` until its layout passes the exact collision check."""
+    w, h, K = intrinsics(cfg.intrinsics)
+    radius = cfg.radius_m or DEFAULT_RADIUS_M[cfg.layout]
+    shell = ShellRanges(tuple(radius), tuple(cfg.elevation_deg), tuple(cfg.azimuth_deg))
+    failures = []
+    for attempt in range(MAX_LAYOUT_ATTEMPTS):
+        rng = item_rng(cfg.seed, "scene", index, attempt)
+        scene, objects = sample_scene(
+            scene_id(index), cfg.seed, cfg.layout, entries, rng, cfg.views_per_scene, w, h, K, shell
+        )
+        report = check_scene(scene, objects)
+        if report.ok:
+            return scene, objects, {"attempt": attempt, "rejected": failures, "worst_overlap_m3": report.worst_m3}
+        failures.append("; ".join(report.problems[:3]))
+    raise CenterArtError(f"{scene_id(index)}: no layout out of {MAX_LAYOUT_ATTEMPTS} passed the collision check")
+
+
+def scene_id(index: int) -> str:
+    return f"scene_{index:06d}"
+
+
+def _write_png(path: Path, array: np.ndarray) -> None:
+    Image.fromarray(array).save(path)
+
+
+def depth_to_png(depth: np.ndarray) -> np.ndarray:
+    return np.clip(np.round(depth * DEPTH_SCALE_MM), 0, 65535).astype(np.uint16)
+
+
+def render_scene_views(
+    renderer,
+    scene: SceneDescription,
+    objects,
+    scene_dir: Path,
+    depth_mode: str,
+    seed: int,
+    index: int,
+    shape_codes=None,
+    save_ir: bool = True,
+) -> list[dict]:
+    """Render every view of a built scene into ``scene_dir/views``; returns per-view summaries."""
+    from centerart.scenes.depth_noise import analytic_depth, stereo_depth, stereo_occlusion, to_ir_uint8
+    from centerart.scenes.labels import view_labels
+
+    summaries = []
+    K = np.asarray(scene.cameras[0].K, float)
+    for v in range(len(scene.cameras)):
+        rng = item_rng(seed, "scene", index, "view", v, "sensor")
+        images = renderer.render(v, ir=depth_mode == "stereo")
+        view_dir = scene_dir / "views" / f"{v:02d}"
+        view_dir.mkdir(parents=True)
+        _write_png(view_dir / "rgb.png", images.rgb)
+        _write_png(view_dir / "depth_true.png", depth_to_png(images.depth))
+        if depth_mode == "stereo":
+            left, right = to_ir_uint8(images.ir_left, rng), to_ir_uint8(images.ir_right, rng)
+            st = scene.stereo
+            occluded = stereo_occlusion(images.ir_left_depth, images.ir_right_depth, K, st.baseline_m)
+            realistic = stereo_depth(left, right, K, st.baseline_m, st.left_offset_m, occluded=occluded)
+            if save_ir:
+                _write_png(view_dir / "ir_left.png", left)
+                _write_png(view_dir / "ir_right.png", right)
+        elif depth_mode == "analytic":
+            realistic = analytic_depth(images.depth, K, rng, baseline=scene.stereo.baseline_m)
+        else:
+            realistic = None
+        if realistic is not None:
+            _write_png(view_dir / "depth_realistic.png", depth_to_png(realistic))
+        _write_png(view_dir / "instances.png", images.instances)
+        _write_png(view_dir / "links.png", images.links)
+        info, heat = view_labels(scene, objects, v, images.instances, renderer.link_ids, shape_codes)
+        _write_png(view_dir / "heatmap.png", np.round(heat * HEATMAP_SCALE).astype(np.uint16))
+        info["depth_realistic"] = depth_mode if realistic is not None else None
+        atomic_write_json(view_dir / "labels.json", info)
+        summaries.append({"view": v, "visible_objects": len(info["objects"])})
+    return summaries
+
+
+def write_textures(scene: SceneDescription, scene_dir: Path) -> None:
+    """Write every textured material's image into ``scene_dir/textures`` and point the description at it."""
+    materials = [b.material for b in scene.boxes] + [m for o in scene.objects for m in o.materials.values()]
+    for m in materials:
+        if m.kind in ("glass", "plain"):
+            continue
+        rel = f"textures/{m.kind}_{m.seed}.png"
+        if not (scene_dir / rel).is_file():
+            write_texture(scene_dir / rel, make_texture(m.kind, tuple(m.color), m.seed))
+        m.texture = rel
+
+
+def _generate_one(job: tuple) -> dict:
+    cfg_dict, index, entries = job
+    cfg = GenerateScenesConfig(**cfg_dict)
+    final = Path(cfg.out) / scene_id(index)
+    if (final / "scene.json").is_file():
+        return {"scene": scene_id(index), "resumed": True, **json.loads((final / "checks.json").read_text())}
+    started = time.perf_counter()
+    scene, objects, check = sample_checked_scene(cfg, index, entries)
+    codes = load_decoder_shape_codes(cfg.decoder_checkpoint) if cfg.decoder_checkpoint else None
+    renderer = _renderer(cfg.shader, cfg.rt_samples_per_pixel)
+    with atomic_directory(final) as tmp:
+        write_textures(scene, tmp)
+        renderer.build(scene, tmp)
+        views = render_scene_views(renderer, scene, objects, tmp, cfg.depth, cfg.seed, index, codes, cfg.save_ir)
+        renderer.close()
+        scene.save(tmp / "scene.json")
+        record = {
+            "scene": scene_id(index),
+            "objects": [o.object_id for o in scene.objects],
+            "views": views,
+            **check,
+            "seconds": round(time.perf_counter() - started, 3),
+        }
+        atomic_write_json(tmp / "checks.json", record)
+    return record
+
+
+def generate_scenes(cfg: GenerateScenesConfig) -> dict:
+    """Generate (or complete) the scene dataset described by ``cfg``; returns the manifest fields."""
+    if cfg.count < 0 or cfg.views_per_scene < 1:
+        raise CenterArtError("--count must be >= 0 and --views-per-scene >= 1")
+    if cfg.decoder_checkpoint is not None:
+        load_decoder_shape_codes(cfg.decoder_checkpoint)  # fail early, in the parent, with a clear message
+    entries = asset_index(cfg.objects)
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)
+    started = time.perf_counter()
+    cfg_dict = {k: v for k, v in asdict(cfg).items()}
+    jobs = [(cfg_dict, i, entries) for i in range(cfg.count)]
+    records = sorted(
+        parallel_map(_generate_one, jobs, cfg.workers, desc="scenes", ray_address=cfg.ray_address),
+        key=lambda r: r["scene"],
+    )
+    images = sum(len(r.get("views", [])) for r in records)
+    fields = {
+        "seed": cfg.seed,
+        "counts": {
+            "scenes": len(records),
+            "images": images,
+            "rejected_layouts": int(sum(len(r.get("rejected", [])) for r in records)),
+            "objects_available": len(entries),
+        },
+        "wall_seconds_this_run": round(time.perf_counter() - started, 1),
+        "assets": [asdict(e) for e in entries],
+        "scenes": records,
+    }
+    write_manifest(out, "scenes", cfg, **fields)
+    return fields
+
+
+# ---------------------------------------------------------------------------- reading
+@dataclass
+class SceneView:
+    """One rendered view read back from disk (depth in metres, 0 = no measurement)."""
+
+    rgb: np.ndarray
+    depth_true: np.ndarray
+    depth_realistic: np.ndarray | None
+    instances: np.ndarray
+    links: np.ndarray
+    heatmap: np.ndarray
+    labels: dict
+
+
+def load_view(view_dir: Path) -> SceneView:
+    view_dir = Path(view_dir)
+    if not (view_dir / "labels.json").is_file():
+        raise CenterArtError(f"{view_dir}: not a rendered view (no labels.json)")
+
+    def img(name):
+        return np.asarray(Image.open(view_dir / name))
+
+    realistic = view_dir / "depth_realistic.png"
+    return SceneView(
+        rgb=img("rgb.png"),
+        depth_true=img("depth_true.png").astype(np.float32) / DEPTH_SCALE_MM,
+        depth_realistic=(
+            np.asarray(Image.open(realistic)).astype(np.float32) / DEPTH_SCALE_MM if realistic.is_file() else None
+        ),
+        instances=img("instances.png"),
+        links=img("links.png"),
+        heatmap=img("heatmap.png").astype(np.float32) / HEATMAP_SCALE,
+        labels=json.loads((view_dir / "labels.json").read_text()),
+    )
+
+
+def list_views(folder: Path) -> list[Path]:
+    """Every view folder of a scene dataset (sorted)."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise CenterArtError(f"{folder}: no such folder")
+    views = sorted(folder.glob("scene_*/views/*/labels.json"))
+    if not views:
+        raise CenterArtError(f"{folder}: no rendered views (expected scene_*/views/*/labels.json)")
+    return [p.parent for p in views]

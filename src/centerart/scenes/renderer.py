@@ -1,0 +1,308 @@
+"""Render a :class:`~centerart.scenes.description.SceneDescription` with SAPIEN 3 on CPU (Mesa lavapipe) or GPU.
+
+Per camera view it returns RGB, true depth, instance segmentation per object and per link, and the IR pair of the
+stereo depth sensor. Objects are loaded with SAPIEN's URDF loader exactly as the asset defines them
+(``loader.scale = obj.scale``, root pose ``world_T_object @ canonical_T_base``, joint values by active-joint name),
+so the kinematics are SAPIEN's own. For generated objects the visual meshes are then replaced by the same
+geometry with box-projected UV coordinates so that procedural textures (wood grain, brushed metal, paint) map
+at a metric scale; real PartNet-Mobility objects keep their own textured visuals.
+
+Frames: camera poses in the description are OpenCV (x right, y down, z forward); SAPIEN cameras look along +x
+with z up, so ``world_T_sapien = world_T_opencv @ OPENCV_T_SAPIEN``. SAPIEN samples pixel (u, v) at its centre
+(u + 0.5, v + 0.5); the principal point handed to SAPIEN is therefore ``K[:2, 2] + 0.5`` so that rendered images
+follow OpenCV's convention for ``K`` (pixel centres at integer coordinates).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from centerart.assets.articulated_object import ArticulatedObject
+from centerart.errors import CenterArtError
+from centerart.scenes.description import MaterialSpec, SceneDescription, load_scene_object
+from centerart.scenes.textures import make_texture
+
+#: Columns: SAPIEN camera axes (forward, left, up) written in OpenCV camera coordinates.
+OPENCV_T_SAPIEN = np.array([[0.0, -1.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+INSTANCE_BACKGROUND = 0
+
+
+@dataclass
+class ViewImages:
+    """One camera view. Depth is float32 metres along the optical axis (0 where nothing was hit)."""
+
+    rgb: np.ndarray  # (H, W, 3) uint8
+    depth: np.ndarray  # (H, W) float32
+    instances: np.ndarray  # (H, W) uint8: 0 background/room, k + 1 for scene object k
+    links: np.ndarray  # (H, W) uint16: 0 background/room, else a link id (see SceneRenderer.link_ids)
+    ir_left: np.ndarray | None = None  # (H, W) float32 in 0..1 (IR camera colour)
+    ir_right: np.ndarray | None = None
+    ir_left_depth: np.ndarray | None = None  # (H, W) float32 true depth seen by each IR camera
+    ir_right_depth: np.ndarray | None = None
+
+
+def uv_mesh(mesh: trimesh.Trimesh, scale_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Flat-shaded copy of ``mesh`` with box-projected UVs: each face takes the two coordinates orthogonal to its
+    dominant normal axis, divided by ``scale_m`` (so one texture repeat covers ``scale_m`` metres)."""
+    tris = mesh.vertices[mesh.faces]  # (F, 3, 3)
+    normals = mesh.face_normals
+    dominant = np.abs(normals).argmax(1)
+    axes = np.array([[1, 2], [0, 2], [0, 1]])[dominant]  # (F, 2): u along the first, v along the second
+    uv = np.take_along_axis(tris, np.repeat(axes[:, None, :], 3, 1), axis=2) / max(scale_m, 1e-6)
+    # Swap to (second, first) axis: on vertical faces u then follows z and v the horizontal axis; the textures'
+    # stripes (wood rings, brush strokes) change with v only, so they run vertically on doors and side panels.
+    uv = uv[..., ::-1]
+    vertices = tris.reshape(-1, 3).astype(np.float32)
+    faces = np.arange(len(vertices), dtype=np.uint32).reshape(-1, 3)
+    vnormals = np.repeat(normals, 3, axis=0).astype(np.float32)
+    return vertices, faces, vnormals, uv.reshape(-1, 2).astype(np.float32)
+
+
+class SceneRenderer:
+    """Builds SAPIEN scenes from descriptions and renders their views.
+
+    One renderer per process: the first picture compiles shaders (several seconds on CPU); later scenes reuse them.
+    ``shader`` is ``default`` (rasterizer) or ``rt`` (path tracer for RGB only; depth, segmentation and IR are
+    always rasterised because they must be exact and noise-free).
+    """
+
+    def __init__(self, shader: str = "default", rt_samples_per_pixel: int = 4):
+        try:
+            import sapien
+        except ImportError as err:  # pragma: no cover - sapien is a hard dependency
+            raise CenterArtError(f"SAPIEN is not installed ({err})") from None
+        self._sapien = sapien
+        if shader not in ("default", "rt"):
+            raise CenterArtError(f"unknown shader {shader!r}; choose default or rt")
+        self.shader = shader
+        if shader == "rt":
+            sapien.render.set_ray_tracing_samples_per_pixel(int(rt_samples_per_pixel))
+            sapien.render.set_ray_tracing_path_depth(4)
+            sapien.render.set_ray_tracing_denoiser("none")  # OIDN needs CUDA here
+        self._textures: dict[str, object] = {}
+        self.scene = None
+        self.description: SceneDescription | None = None
+        self.link_ids: dict[int, tuple[int, str]] = {}
+        self._entity_to_link_id: np.ndarray = np.zeros(1, np.uint16)
+        self._entity_to_instance: np.ndarray = np.zeros(1, np.uint8)
+        self._pattern_key = None
+
+    # ------------------------------------------------------------------ building
+    def build(self, description: SceneDescription, scene_dir: Path | None = None) -> list[ArticulatedObject]:
+        """Create the SAPIEN scene; returns the loaded objects (held states as described)."""
+        sapien = self._sapien
+        try:
+            scene = sapien.Scene()
+        except RuntimeError as err:
+            raise CenterArtError(
+                f"SAPIEN found no Vulkan rendering device ({err}); on CPU install Mesa >= 24 lavapipe "
+                "(scripts/setup.sh: apt-get install -t bookworm-backports mesa-vulkan-drivers)"
+            ) from None
+        self.scene, self.description, self._scene_dir = scene, description, scene_dir
+        scene.set_ambient_light(list(description.ambient))
+        for light in description.lights:
+            if light.kind == "point":
+                scene.add_point_light(
+                    light.position, light.color, shadow=light.shadow, shadow_far=12.0, shadow_map_size=1024
+                )
+            elif light.kind == "directional":
+                scene.add_directional_light(
+                    light.direction,
+                    light.color,
+                    shadow=light.shadow,
+                    position=[2.0, 0.0, 1.5],
+                    shadow_scale=5.0,
+                    shadow_map_size=2048,
+                )
+            elif light.kind == "spot":
+                scene.add_spot_light(light.position, light.direction, 1.0, 1.2, light.color, shadow=light.shadow)
+            else:
+                raise CenterArtError(f"scene {description.scene_id}: unknown light kind {light.kind!r}")
+        for box in description.boxes:
+            self._add_box(box)
+        objects = []
+        entity_link: dict[int, tuple[int, str]] = {}
+        for k, spec in enumerate(description.objects):
+            obj = load_scene_object(spec)
+            objects.append(obj)
+            art = self._add_object(obj, spec)
+            for link in art.links:
+                entity_link[link.entity.per_scene_id] = (k, link.name)
+        # Dense lookup tables from SAPIEN's per-scene entity id to instance and link id.
+        n = max(entity_link, default=0) + 1
+        self._entity_to_instance = np.zeros(n, np.uint8)
+        self._entity_to_link_id = np.zeros(n, np.uint16)
+        self.link_ids = {}
+        for i, (eid, (k, link)) in enumerate(sorted(entity_link.items(), key=lambda t: (t[1][0], t[1][1]))):
+            self._entity_to_instance[eid] = k + 1
+            self._entity_to_link_id[eid] = i + 1
+            self.link_ids[i + 1] = (k, link)
+        self._make_cameras()
+        return objects
+
+    def _texture(self, spec: MaterialSpec):
+        if spec.kind in ("glass", "plain"):
+            return None
+        key = spec.texture or f"{spec.kind}-{spec.seed}-{spec.color}"
+        if key not in self._textures:
+            sapien = self._sapien
+            path = Path(self._scene_dir) / spec.texture if (spec.texture and self._scene_dir) else None
+            if path is not None and path.is_file():
+                self._textures[key] = sapien.render.RenderTexture2D(str(path), mipmap_levels=4)
+            else:
+                img = make_texture(spec.kind, tuple(spec.color), spec.seed)
+                rgba = np.dstack([img, np.full(img.shape[:2], 255, np.uint8)])
+                self._textures[key] = sapien.render.RenderTexture2D(rgba, "R8G8B8A8Unorm", mipmap_levels=4, srgb=True)
+        return self._textures[key]
+
+    def _material(self, spec: MaterialSpec):
+        sapien = self._sapien
+        tex = self._texture(spec)
+        color = [1.0, 1.0, 1.0, 1.0] if tex is not None else list(spec.color)
+        mat = sapien.render.RenderMaterial(
+            base_color=color, roughness=spec.roughness, metallic=spec.metallic, specular=spec.specular
+        )
+        if tex is not None:
+            mat.base_color_texture = tex
+        return mat
+
+    def _add_box(self, box) -> None:
+        sapien = self._sapien
+        mesh = trimesh.creation.box(extents=2.0 * np.asarray(box.half_size))
+        pose = np.asarray(box.world_T_box, float)
+        # UVs from world coordinates so textures of adjacent boxes line up and keep their metric scale.
+        mesh.apply_transform(pose)
+        v, f, n, uv = uv_mesh(mesh, box.material.texture_scale_m)
+        entity = sapien.Entity()
+        entity.name = box.name
+        body = sapien.render.RenderBodyComponent()
+        body.attach(sapien.render.RenderShapeTriangleMesh(v, f, n, uv, self._material(box.material)))
+        entity.add_component(body)
+        self.scene.add_entity(entity)
+
+    def _add_object(self, obj: ArticulatedObject, spec):
+        sapien = self._sapien
+        loader = self.scene.create_urdf_loader()
+        loader.fix_root_link = True
+        loader.scale = obj.scale
+        art = loader.load(str(obj.path / "mobility.urdf"))
+        if art is None:
+            raise CenterArtError(f"{obj.path / 'mobility.urdf'}: SAPIEN could not load the URDF")
+        world_T_object = np.asarray(spec.world_T_object, float)
+        art.set_root_pose(sapien.Pose(world_T_object @ obj.canonical_T_base))
+        config = obj.configuration(spec.joint_state)
+        names = [j.name for j in art.get_active_joints()]
+        art.set_qpos(np.array([config.get(n, 0.0) for n in names], dtype=np.float32))
+        if spec.materials:
+            part_class = {name: v[0] for name, v in obj.meta.get("materials", {}).items()}
+            for link in art.links:
+                self._retexture_link(link.entity, obj.visual_parts.get(link.name, []), part_class, spec.materials)
+        return art
+
+    def _retexture_link(self, entity, parts, part_class: dict, materials: dict) -> None:
+        sapien = self._sapien
+        for comp in list(entity.components):
+            if isinstance(comp, sapien.render.RenderBodyComponent):
+                entity.remove_component(comp)
+        if not parts:
+            return
+        body = sapien.render.RenderBodyComponent()
+        for part in parts:
+            cls = part_class.get(part.name, "painted")
+            mspec = materials.get(cls) or materials["painted"]
+            v, f, n, uv = uv_mesh(part.mesh, mspec.texture_scale_m)
+            body.attach(sapien.render.RenderShapeTriangleMesh(v, f, n, uv, self._material(mspec)))
+        entity.add_component(body)
+
+    def _make_cameras(self) -> None:
+        """One camera rig (RGB, depth/segmentation, IR pair, dot projector) per scene, moved to each view."""
+        sapien = self._sapien
+        desc = self.description
+        if not desc.cameras:
+            raise CenterArtError(f"scene {desc.scene_id} has no cameras")
+        cam0 = desc.cameras[0]
+        for c in desc.cameras:
+            if (c.width, c.height) != (cam0.width, cam0.height) or not np.allclose(c.K, cam0.K):
+                raise CenterArtError(f"scene {desc.scene_id}: all views must share one image size and K")
+        w, h, K = cam0.width, cam0.height, np.asarray(cam0.K, float)
+        self.K, self.width, self.height = K, w, h
+        rig = sapien.Entity()
+        rig.name = "camera_rig"
+
+        shader_root = Path(sapien.__file__).parent / "vulkan_shader"
+
+        def camera(name, shader, local_y=0.0):
+            # The component wants a shader folder path, not a name; "" means the process-wide default.
+            cam = sapien.render.RenderCameraComponent(w, h, str(shader_root / shader) if shader else "")
+            cam.name = name
+            cam.set_perspective_parameters(cam0.near, cam0.far, K[0, 0], K[1, 1], K[0, 2] + 0.5, K[1, 2] + 0.5, K[0, 1])
+            cam.local_pose = sapien.Pose([0.0, local_y, 0.0])
+            rig.add_component(cam)
+            return cam
+
+        self.cam_rgb = camera("rgb", "rt" if self.shader == "rt" else "")
+        self.cam_geo = camera("geometry", "") if self.shader == "rt" else self.cam_rgb
+        st = desc.stereo
+        # SAPIEN's y axis points left, so an offset to the right (OpenCV +x) is -y.
+        self.cam_ir_l = camera("ir_left", "", -st.left_offset_m)
+        self.cam_ir_r = camera("ir_right", "", -(st.left_offset_m + st.baseline_m))
+        from centerart.scenes.depth_noise import dot_pattern
+
+        self.projector = sapien.render.RenderTexturedLightComponent()
+        self.projector.color = [0.0, 0.0, 0.0]
+        fov = np.deg2rad(st.projector_fov_deg)
+        self.projector.inner_fov = fov
+        self.projector.outer_fov = fov
+        self.projector.shadow = True
+        self.projector.shadow_near = 0.1
+        self.projector.shadow_far = 10.0
+        pattern = dot_pattern(st.pattern_seed, dot_fraction=st.pattern_dot_fraction)
+        self.projector.texture = sapien.render.RenderTexture2D(pattern, "R8G8B8A8Unorm", srgb=False)
+        self.projector.local_pose = sapien.Pose([0.0, -st.projector_offset_m, 0.0])
+        rig.add_component(self.projector)
+        self.scene.add_entity(rig)
+        self.rig = rig
+
+    # ------------------------------------------------------------------ rendering
+    def set_view(self, index: int) -> np.ndarray:
+        """Move the rig to camera ``index``; returns its ``world_T_camera`` (OpenCV)."""
+        pose = self.description.camera_pose(index)
+        self.rig.set_pose(self._sapien.Pose(pose @ OPENCV_T_SAPIEN))
+        return pose
+
+    def render(self, index: int, ir: bool = False) -> ViewImages:
+        self.set_view(index)
+        scene = self.scene
+        scene.update_render()
+        self.cam_rgb.take_picture()
+        rgb = self.cam_rgb.get_picture("Color")[..., :3]
+        rgb = (np.clip(rgb, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+        if self.cam_geo is not self.cam_rgb:
+            self.cam_geo.take_picture()
+        pos = self.cam_geo.get_picture("Position")
+        depth = np.where(pos[..., 3] < 1.0, -pos[..., 2], 0.0).astype(np.float32)
+        seg = self.cam_geo.get_picture("Segmentation")[..., 1].astype(np.int64)
+        seg = np.where(seg < len(self._entity_to_instance), seg, 0)
+        images = ViewImages(rgb, depth, self._entity_to_instance[seg], self._entity_to_link_id[seg])
+        if ir:
+            intensity = self.description.stereo.projector_intensity
+            self.projector.color = [intensity] * 3
+            scene.update_render()
+            self.cam_ir_l.take_picture()
+            self.cam_ir_r.take_picture()
+            images.ir_left = self.cam_ir_l.get_picture("Color")[..., :3].mean(-1)
+            images.ir_right = self.cam_ir_r.get_picture("Color")[..., :3].mean(-1)
+            for cam, attr in ((self.cam_ir_l, "ir_left_depth"), (self.cam_ir_r, "ir_right_depth")):
+                p = cam.get_picture("Position")
+                setattr(images, attr, np.where(p[..., 3] < 1.0, -p[..., 2], 0.0).astype(np.float32))
+            self.projector.color = [0.0, 0.0, 0.0]
+        return images
+
+    def close(self) -> None:
+        self.scene = None
+        self.description = None
