@@ -1,0 +1,1 @@
+"""Evaluation: metrics on shapes and grasps, physics execution of predicted grasps, reports."""

@@ -58,7 +58,7 @@ class GenerateSdfConfig:
     seed: int = 0
     """Global seed: item (object, state) depends only on (seed, object_id, state_index)."""
     sampling: SamplingConfig = field(default_factory=SamplingConfig)
-    """Point mix and sign methods (``--points`` overrides ``sampling.points``)."""
+    """Point mix and sign methods."""
 
 
 @dataclass(frozen=True)
@@ -66,11 +66,11 @@ class _Item:
     object_dir: str
     object_id: str
     state_index: int
-    q: float | None  # None: the object's k-th of n evenly spaced states
-    n_states: int
+    n_states: int  # 0: the state comes from label_file; else the k-th of n evenly spaced states
     label_file: str | None
     out: str
     seed: int
+    points: int
     sampling: SamplingConfig
 
 
@@ -84,7 +84,15 @@ def _plan(cfg: GenerateSdfConfig) -> list[_Item]:
         raise CenterArtError(f"--points must be >= 1, got {cfg.points}")
     if cfg.states < 1:
         raise CenterArtError(f"--states must be >= 1, got {cfg.states}")
-    sampling = SamplingConfig(**{**asdict(cfg.sampling), "points": cfg.points})
+    s = cfg.sampling
+    if not (0 <= s.near_fraction and 0 <= s.far_fraction and s.near_fraction + s.far_fraction <= 1):
+        raise CenterArtError("--sampling.near-fraction and --sampling.far-fraction must be >= 0 and sum to <= 1")
+    if s.parity_rays < 1 or s.parity_rays % 2 == 0:
+        raise CenterArtError(f"--sampling.parity-rays must be odd and >= 1, got {s.parity_rays}")
+    if s.escape_rays < 1 or s.flood_cells < 8 or s.check_points < 1:
+        raise CenterArtError(
+            "--sampling.escape-rays, --sampling.flood-cells (>= 8), --sampling.check-points must be positive"
+        )
     items = []
     for folder in list_objects(objects_dir):
         oid = folder.name
@@ -95,10 +103,10 @@ def _plan(cfg: GenerateSdfConfig) -> list[_Item]:
                     k = int(f.stem.split("_")[1])
                 except (IndexError, ValueError):
                     raise CenterArtError(f"{f}: grasp-label file name is not state_<k>.npz") from None
-                items.append(_Item(str(folder), oid, k, None, 0, str(f), str(cfg.out), cfg.seed, sampling))
+                items.append(_Item(str(folder), oid, k, 0, str(f), str(cfg.out), cfg.seed, cfg.points, s))
         else:
             for k in range(cfg.states):
-                items.append(_Item(str(folder), oid, k, None, cfg.states, None, str(cfg.out), cfg.seed, sampling))
+                items.append(_Item(str(folder), oid, k, cfg.states, None, str(cfg.out), cfg.seed, cfg.points, s))
     return items
 
 
@@ -106,14 +114,37 @@ def _stats_path(out: Path, object_id: str, state_index: int) -> Path:
     return sample_path(out, object_id, state_index).with_suffix(".json")
 
 
+def _fingerprint(item: _Item) -> dict:
+    return {"seed": item.seed, "points": item.points, "sampling": asdict(item.sampling)}
+
+
 def _generate_one(item: _Item) -> dict:
+    try:
+        return _generate_one_unchecked(item)
+    except CenterArtError as err:
+        # Re-raise as the base class: AssetError's two-argument constructor does not survive the trip back from
+        # a worker process (pickle rebuilds exceptions from their message alone).
+        raise CenterArtError(str(err)) from None
+    except (ValueError, RuntimeError, MemoryError) as err:
+        raise CenterArtError(
+            f"{item.object_dir} state {item.state_index}: SDF sampling failed ({type(err).__name__}: {err})"
+        ) from None
+
+
+def _generate_one_unchecked(item: _Item) -> dict:
     out = Path(item.out)
     npz, stats_file = (
         sample_path(out, item.object_id, item.state_index),
         _stats_path(out, item.object_id, item.state_index),
     )
     if npz.is_file() and stats_file.is_file():
-        return {**json.loads(stats_file.read_text()), "resumed": True}
+        stats = json.loads(stats_file.read_text())
+        if stats.get("config") != _fingerprint(item):
+            raise CenterArtError(
+                f"{npz}: was made with other settings ({stats.get('config')}); "
+                "use a new --out or the same options to resume"
+            )
+        return {**stats, "resumed": True}
     started = time.perf_counter()
     obj = ArticulatedObject.load(item.object_dir)
     if item.label_file is not None:
@@ -132,7 +163,7 @@ def _generate_one(item: _Item) -> dict:
         q, poses = obj.denormalize(u), np.zeros((0, 4, 4))
     rng = item_rng(item.seed, item.object_id, item.state_index)
     mesh, closed = object_surface(obj, q)
-    points = sample_points(mesh, item.sampling, rng)
+    points = sample_points(mesh, item.points, item.sampling, rng)
     signed = signed_distance(mesh, closed, points, item.sampling, rng)
     t_sdf = time.perf_counter() - started
     t0 = time.perf_counter()
@@ -164,6 +195,7 @@ def _generate_one(item: _Item) -> dict:
         "grasps": len(poses),
         "seconds_sdf": round(t_sdf, 3),
         "seconds_grasp_targets": round(t_grasp, 4),
+        "config": _fingerprint(item),
     }
     atomic_write_json(stats_file, stats)  # written last: its presence marks the item finished
     return stats
@@ -201,10 +233,12 @@ def generate_sdf(cfg: GenerateSdfConfig, progress: bool = True) -> dict:
         "states": len(rows),
         "points": int(sum(r["points"] for r in rows)),
         "states_without_grasps": sum(r["grasps"] == 0 for r in rows),
+        "resumed": sum(bool(r.get("resumed")) for r in rows),
         "objects_below_min_sign_agreement": sorted(
             k for k, o in per_object.items() if not o["meets_min_sign_agreement"]
         ),
     }
     summary = {"seed": cfg.seed, "min_sign_agreement": MIN_SIGN_AGREEMENT, "counts": counts, "objects": per_object}
+    rows = [{k: v for k, v in r.items() if k != "config"} for r in rows]
     write_manifest(out, "sdf", cfg, **summary, states=rows)
     return summary

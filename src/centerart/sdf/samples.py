@@ -17,6 +17,8 @@ q_normalized    ()          (q - lower) / (upper - lower)
 joint_type      ()          "revolute" | "prismatic"
 points          (N, 3)      query points, float32
 sdf             (N,)        signed distance to the true surface at state q, positive outside, float32
+                            (real triangle soups: to the soup thickened by ``sampling.soup_shell``, see
+                            :mod:`centerart.sdf.sampling`)
 grasp_points    (N, 5, 3)   control points (gripper.CONTROL_POINTS_TCP) of the labelled grasp whose TCP is
                             nearest to the point, float32; zeros when the state has no labels
 grasp_distance  (N,)        distance from the point to that grasp's TCP position, float32 (inf if none)

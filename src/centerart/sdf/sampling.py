@@ -1,6 +1,6 @@
 """Query points and their signed distances for one (object, joint state), canonical frame, metres.
 
-Point mix (fractions of ``SamplingConfig.points``), each set drawn around area-weighted surface samples:
+Point mix (fractions of the point count), each set drawn around area-weighted surface samples:
 
 - ``near`` (default 45%): surface + N(0, 5 mm). Puts most of the budget where the zero level set must be
   accurate: reconstruction is judged by Chamfer distance at the millimetre level and DeepSDF's clamped loss only
@@ -37,27 +37,27 @@ from centerart.sdf.signs import (
 class SamplingConfig:
     """How query points are drawn and signed (see the module docstring for why)."""
 
-    points: int = 100_000
-    """Query points per (object, state)."""
     near_fraction: float = 0.45
+    """Share of points at surface + N(0, near_sigma)."""
     near_sigma: float = 0.005
     """m, standard deviation of the near-surface noise."""
     far_fraction: float = 0.35
+    """Share of points at surface + N(0, far_sigma); the rest is uniform in the padded bounds."""
     far_sigma: float = 0.03
     """m, standard deviation of the wider band."""
     padding: float = 0.05
     """m added on every side of the object's bounds for the uniform points."""
     parity_rays: int = 5
     """Rays voting on ray parity (closed meshes; odd)."""
-    escape_rays: int = 64
-    """Rays of the escape test (soups' check)."""
-    flood_cells: int = 192
-    """Voxels along the longest side of the flood-fill grid (soups' sign)."""
+    escape_rays: int = 256
+    """Rays of the escape test (soups' sign)."""
+    flood_cells: int = 256
+    """Voxels along the longest side of the flood-fill grid (soups' check)."""
     soup_shell: float = 0.002
     """m, half-thickness given to triangle soups (0 for closed meshes)."""
     check_points: int = 10_000
-    """Points (a seeded subsample) on which the second sign method is run; winding numbers cost O(points x
-    triangles)."""
+    """Points (a seeded subsample) on which the second sign method is run (winding numbers cost O(points x
+    triangles)); 10k points give the agreement to about +-0.2%."""
 
 
 @dataclass
@@ -70,11 +70,12 @@ class SignedSamples:
     check_method: str
 
 
-def sample_points(mesh: trimesh.Trimesh, cfg: SamplingConfig, rng: np.random.Generator) -> np.ndarray:
-    """Query points (N, 3) around ``mesh``; deterministic given ``rng``."""
-    n_near = round(cfg.points * cfg.near_fraction)
-    n_far = round(cfg.points * cfg.far_fraction)
-    n_uniform = cfg.points - n_near - n_far
+def sample_points(mesh: trimesh.Trimesh, count: int, cfg: SamplingConfig, rng: np.random.Generator) -> np.ndarray:
+    """``count`` query points (count, 3) around ``mesh``, near set first, then far, then uniform; deterministic
+    given ``rng``."""
+    n_near = round(count * cfg.near_fraction)
+    n_far = round(count * cfg.far_fraction)
+    n_uniform = count - n_near - n_far
     if min(n_near, n_far, n_uniform) < 0:
         raise ValueError("near_fraction + far_fraction must be <= 1")
     surface, _ = trimesh.sample.sample_surface(mesh, n_near + n_far, seed=int(rng.integers(2**31)))
@@ -98,11 +99,11 @@ def signed_distance(
         check_inside = winding_number(mesh, points[check_idx]) > 0.5
         shell, methods = 0.0, ("ray_parity", "winding_number")
     else:
+        inside = ray_escape_inside(scene, points, cfg.escape_rays)
         lo = np.minimum(mesh.bounds[0], points.min(0)) - cfg.padding
         hi = np.maximum(mesh.bounds[1], points.max(0)) + cfg.padding
-        inside = flood_fill_inside(mesh, scene, points, lo, hi, cfg.flood_cells)
-        check_inside = ray_escape_inside(scene, points[check_idx], cfg.escape_rays)
-        shell, methods = cfg.soup_shell, ("flood_fill", "ray_escape")
+        check_inside = flood_fill_inside(mesh, scene, points[check_idx], lo, hi, cfg.flood_cells)
+        shell, methods = cfg.soup_shell, ("ray_escape", "flood_fill")
     sdf = np.where(inside, -dist, dist) - shell
     # Agreement on the sign of the final field: within the shell both methods give a negative value.
     check_sdf = np.where(check_inside, -dist[check_idx], dist[check_idx]) - shell

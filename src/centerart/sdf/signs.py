@@ -13,13 +13,15 @@ useless there: on the sample objects the seeded rays of one point disagree for 2
 single open sheet flips parity. Winding numbers need an orientation the soups lack (their double-sided walls
 give 0 everywhere). So:
 
-- sign: :func:`flood_fill_inside`, empty space the flood from the grid border cannot reach is inside; points in
+- sign: :func:`ray_escape_inside`, a point is outside when at least one of many evenly spread rays leaves the
+  scene without a hit, i.e. when it can be seen from outside: the visibility convention of DeepSDF-style data
+  (depth scans from a sphere of cameras) on exact geometry, so closed boards thinner than any voxel stay solid.
+  The SDF gives every sheet a thin shell (see :mod:`centerart.sdf.sampling`), so open sheets have an inside too.
+- check: :func:`flood_fill_inside`, empty space the flood from the grid border cannot reach is inside; points in
   the voxel band around the surface take the label of the first empty voxel found by walking away from their
-  nearest surface point (a point just outside a wall walks outwards, one inside walks inwards). The SDF then
-  gives every sheet a thin shell (see :mod:`centerart.sdf.sampling`), so open sheets have an inside too.
-- check: :func:`ray_escape_inside`, a point is outside when at least one of many seeded rays leaves the scene
-  without hitting anything. Exact geometry, no voxels, no connectivity. The two disagree where a soup is
-  ambiguous: sheltered pockets (escape: inside, flood: outside) and shells with holes wider than a voxel.
+  nearest surface point. Voxels and connectivity, no rays. The two disagree where a soup is ambiguous: bodies
+  whose gaps are wider than the flood's closing but let few straight rays through (flood: outside, escape:
+  inside), sheltered pockets reached by a bent path only, and boards thinner than the voxel band.
 """
 
 from __future__ import annotations
@@ -43,8 +45,6 @@ def raycasting_scene(mesh: trimesh.Trimesh) -> o3d.t.geometry.RaycastingScene:
 def ray_directions(count: int, seed: int = 0) -> np.ndarray:
     """``count`` fixed unit directions (count, 3), never along a coordinate axis in practice (generated objects
     are axis-aligned boxes: an axis-aligned ray can run inside a face or hit an edge exactly)."""
-    if count == 1:
-        return np.array([[0.5773, 0.5774, 0.5775]]) / np.linalg.norm([0.5773, 0.5774, 0.5775])
     # Fibonacci sphere (even coverage for the escape test) turned by a seeded random rotation.
     k = np.arange(count) + 0.5
     z = 1.0 - 2.0 * k / count
@@ -78,15 +78,23 @@ def ray_parity_inside(
 
 
 def ray_escape_inside(
-    scene: o3d.t.geometry.RaycastingScene, points: np.ndarray, rays: int = 64, seed: int = 1, chunk: int = 20_000
+    scene: o3d.t.geometry.RaycastingScene, points: np.ndarray, rays: int = 256, seed: int = 1, chunk: int = 20_000
 ) -> np.ndarray:
-    """Inside (bool per point) unless one of ``rays`` evenly spread rays leaves without a hit. For soups."""
+    """Inside (bool per point) unless one of ``rays`` evenly spread rays leaves without a hit. For soups.
+
+    Most outside points escape along one of the first few directions, so every point first tries a spread
+    subset of 32 rays and only the points still enclosed try the rest."""
     dirs = ray_directions(rays, seed).astype(np.float32)
+    first, rest = dirs[:: max(1, rays // 32)], np.delete(dirs, np.arange(0, rays, max(1, rays // 32)), axis=0)
     points = np.asarray(points, np.float32)
     inside = np.zeros(len(points), bool)
     for s in range(0, len(points), chunk):
-        blocked = scene.test_occlusions(_ray_tensor(points[s : s + chunk], dirs)).numpy()
-        inside[s : s + chunk] = blocked.all(axis=1)
+        p = points[s : s + chunk]
+        enclosed = scene.test_occlusions(_ray_tensor(p, first)).numpy().all(axis=1)
+        if len(rest) and enclosed.any():
+            idx = np.flatnonzero(enclosed)
+            enclosed[idx] = scene.test_occlusions(_ray_tensor(p[idx], rest)).numpy().all(axis=1)
+        inside[s : s + chunk] = enclosed
     return inside
 
 
@@ -153,6 +161,11 @@ class FloodFill:
         return decided & ~self.outside[i], decided
 
 
+_R = np.arange(-5, 6)
+_OFFSETS = np.stack(np.meshgrid(_R, _R, _R, indexing="ij"), axis=-1).reshape(-1, 3)
+_OFFSETS = _OFFSETS[np.argsort(np.linalg.norm(_OFFSETS, axis=1), kind="stable")]
+
+
 def flood_fill_inside(
     mesh: trimesh.Trimesh,
     scene: o3d.t.geometry.RaycastingScene,
@@ -164,9 +177,8 @@ def flood_fill_inside(
     seed: int = 0,
 ) -> np.ndarray:
     """Inside (bool per point) by exterior flood fill on a grid over [lo, hi] with ``cells`` voxels along its
-    longest side. Band points walk from their nearest surface point away from it, up to 6 voxels, and take the
-    label of the first empty voxel (none found: outside, as for a point between the two faces of a wall thinner
-    than the band)."""
+    longest side. Band points walk from their nearest surface point away from it and take the label of the first
+    empty voxel; points whose walk stays in the band take the label of the empty voxel nearest to them."""
     fill = FloodFill.build(mesh, lo, hi, cells, grow, seed)
     points = np.asarray(points, float)
     inside, decided = fill.classify(points)
@@ -187,5 +199,20 @@ def flood_fill_inside(
             which = np.flatnonzero(todo)[probe_decided]
             label[which] = probe_inside[probe_decided]
             todo[which] = False
+        if todo.any():
+            # Stuck in the band (e.g. inside near an edge, where walking off one face runs along the other): take
+            # the label of the empty voxel nearest to the point's own voxel, searched outwards up to 5 voxels.
+            stuck = np.flatnonzero(todo)
+            base = np.stack(fill.index(p[stuck]), axis=1)
+            shape = np.array(fill.wall.shape)
+            for offset in _OFFSETS:
+                cell = np.clip(base + offset, 0, shape - 1)
+                empty = ~fill.wall[cell[:, 0], cell[:, 1], cell[:, 2]]
+                if empty.any():
+                    hit = cell[empty]
+                    label[stuck[empty]] = ~fill.outside[hit[:, 0], hit[:, 1], hit[:, 2]]
+                    stuck, base = stuck[~empty], base[~empty]
+                    if not len(stuck):
+                        break
         inside[band] = label
     return inside
