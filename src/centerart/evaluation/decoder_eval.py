@@ -28,15 +28,22 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import cKDTree
 from tqdm import tqdm
 
 from centerart.errors import CenterArtError
+from centerart.evaluation.metrics import (
+    CHAMFER_SAMPLES as SURFACE_SAMPLES,
+)
+from centerart.evaluation.metrics import (
+    FSCORE_THRESHOLD_M as FSCORE_THRESHOLD,
+)
+from centerart.evaluation.metrics import (
+    GRASP_MATCH_ANGLE_DEG,
+)
+from centerart.evaluation.metrics import (
+    GRASP_MATCH_POSITION_M as GRASP_MATCH_DISTANCE,
+)
 
-FSCORE_THRESHOLD = 0.01  # m
-SURFACE_SAMPLES = 30000
-GRASP_MATCH_DISTANCE = 0.02  # m
-GRASP_MATCH_ANGLE_DEG = 30.0
 GROUPS = ("train", "heldout_state", "heldout_object")
 
 
@@ -66,30 +73,24 @@ class EvalDecoderConfig:
 
 # --------------------------------------------------------------------------------------- metric functions
 def chamfer_fscore(pred, true, n: int = SURFACE_SAMPLES, threshold: float = FSCORE_THRESHOLD, seed: int = 0):
-    """(Chamfer-L1 in mm, F-score) between two meshes; an empty prediction gives (inf, 0)."""
-    import trimesh
+    """(Chamfer-L1 in mm, F-score) between two meshes (``evaluation.metrics.shape_metrics``: samples of each
+    surface measured to the other surface); an empty prediction gives (inf, 0)."""
+    from centerart.evaluation.metrics import shape_metrics
 
     if len(pred.faces) == 0:
         return float("inf"), 0.0
-    a, _ = trimesh.sample.sample_surface(pred, n, seed=seed)
-    b, _ = trimesh.sample.sample_surface(true, n, seed=seed + 1)
-    d_ab = cKDTree(b).query(a)[0]
-    d_ba = cKDTree(a).query(b)[0]
-    chamfer_mm = 1000.0 * 0.5 * (d_ab.mean() + d_ba.mean())
-    precision, recall = (d_ab < threshold).mean(), (d_ba < threshold).mean()
-    f = 0.0 if precision + recall == 0 else 2 * precision * recall / (precision + recall)
-    return float(chamfer_mm), float(f)
+    m = shape_metrics(pred, true, n, threshold, seed)
+    return float(m.chamfer_l1_mm), float(m.fscore)
 
 
 def grasp_matches(pred: np.ndarray, labels: np.ndarray) -> np.ndarray:
     """(P, L) bool: prediction p is within the match thresholds of label l (finger symmetry)."""
-    from centerart.inference.decoder_grasps import rotation_angle_symmetric
+    from centerart.evaluation.metrics import grasp_distances
 
     if len(pred) == 0 or len(labels) == 0:
         return np.zeros((len(pred), len(labels)), bool)
-    d = np.linalg.norm(pred[:, None, :3, 3] - labels[None, :, :3, 3], axis=-1)
-    ang = rotation_angle_symmetric(pred[:, None, :3, :3], labels[None, :, :3, :3])
-    return (d < GRASP_MATCH_DISTANCE) & (ang < np.deg2rad(GRASP_MATCH_ANGLE_DEG))
+    pos, ang = grasp_distances(pred, labels)
+    return (pos <= GRASP_MATCH_DISTANCE) & (ang <= GRASP_MATCH_ANGLE_DEG)
 
 
 # --------------------------------------------------------------------------------------- evaluation
