@@ -1,21 +1,12 @@
-"""Fixtures for the grasp stage: a few generated objects with known handles, and the real samples."""
+"""Fixtures for the grasp stage: a few generated objects with known handles (the real samples: tests/conftest.py)."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
 
 from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
-
-PARTNET_SAMPLES = Path(
-    os.environ.get(
-        "CENTERART_PARTNET_SAMPLES", Path(__file__).resolve().parents[3] / "shared" / "partnet-mobility-samples"
-    )
-)
-if not PARTNET_SAMPLES.is_dir():  # worktrees live beside the main checkout
-    PARTNET_SAMPLES = Path("/work/shared/partnet-mobility-samples")
 
 #: With seed 0: dishwasher_0001 has a bar handle on its bottom-hinged door; storage_furniture_0003's target is a
 #: drawer with a bar handle; microwave_0001 has a U handle on a side-hinged door.
@@ -32,13 +23,6 @@ def objects_dir(tmp_path_factory) -> Path:
     generate_objects(GenerateObjectsConfig(out=out, category="storage_furniture", count=4, seed=0, workers=1))
     (out / "manifest.json").unlink()
     return out
-
-
-@pytest.fixture(scope="session")
-def partnet_dir() -> Path:
-    if not PARTNET_SAMPLES.is_dir():
-        pytest.skip(f"PartNet-Mobility samples not found at {PARTNET_SAMPLES} (set CENTERART_PARTNET_SAMPLES)")
-    return PARTNET_SAMPLES
 
 
 @pytest.fixture(scope="session")

@@ -12,8 +12,6 @@ from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
 from centerart.geometry.transforms import make_pose
 from centerart.grasps.labels import StateLabels
 
-REAL_SAMPLES = Path("/work/shared/partnet-mobility-samples")
-
 
 def front_face_grasps(obj: ArticulatedObject, q: float, count: int, rng: np.random.Generator) -> np.ndarray:
     """TCP poses (count, 4, 4) on the moving part's front face at state q (canonical frame): approach along -x

@@ -18,7 +18,6 @@ from centerart.sdf.samples import SdfSamples, list_sample_files, sample_path
 from centerart.sdf.sampling import SamplingConfig
 
 SMALL = SamplingConfig(check_points=3000)
-REAL_SAMPLES = Path("/work/shared/partnet-mobility-samples")
 
 
 @pytest.fixture(scope="module")
@@ -154,13 +153,12 @@ REAL_AGREEMENT_FLOOR = 0.75
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not REAL_SAMPLES.is_dir(), reason=f"{REAL_SAMPLES} absent (real PartNet-Mobility samples)")
-def test_real_partnet_samples(tmp_path):
+def test_real_partnet_samples(tmp_path, partnet_dir):
     ids = ["101593", "7119"]
     objects = tmp_path / "objects"
     objects.mkdir()
     for oid in ids:
-        (objects / oid).symlink_to(REAL_SAMPLES / oid)
+        (objects / oid).symlink_to(partnet_dir / oid)
     cfg = GenerateSdfConfig(objects, tmp_path, tmp_path / "sdf", points=20_000, states=2, workers=1, sampling=SMALL)
     summary = generate_sdf(cfg, progress=False)
     assert summary["counts"]["states"] == 4
