@@ -107,7 +107,9 @@ def main() -> None:
     ap.add_argument("--objects", type=int, default=1, help="generated objects per category")
     ap.add_argument("--states", type=int, default=2)
     ap.add_argument("--points", type=int, default=100_000)
-    ap.add_argument("--real", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "partnet-mobility-samples")
+    ap.add_argument(
+        "--real", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "partnet-mobility-samples"
+    )
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         generate_objects(GenerateObjectsConfig(out=Path(tmp), count=args.objects, seed=0, workers=1))
