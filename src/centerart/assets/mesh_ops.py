@@ -5,6 +5,8 @@ from __future__ import annotations
 import manifold3d
 import numpy as np
 import trimesh
+from scipy import ndimage
+from skimage.measure import marching_cubes
 
 
 def to_manifold(mesh: trimesh.Trimesh) -> manifold3d.Manifold:
@@ -37,14 +39,24 @@ def intersection_volume(a: trimesh.Trimesh | manifold3d.Manifold, b: trimesh.Tri
 
 
 def voxel_remesh(mesh: trimesh.Trimesh, pitch: float) -> trimesh.Trimesh:
-    """Closed surface of a triangle soup: surface voxels at ``pitch`` m, enclosed voxels filled, marching cubes.
+    """Closed surface of a triangle soup: voxels that hold surface samples are walls, every voxel the outside
+    cannot reach is filled, and marching cubes extracts the boundary of that solid.
 
-    Used for real PartNet-Mobility meshes, which are open soups where a boolean union or a winding-number sign
-    is unreliable.
+    Used for real PartNet-Mobility meshes, which are open soups where a boolean union or a winding-number sign is
+    unreliable. Surface samples (about four per voxel face) mark the walls instead of trimesh's ``voxelized``,
+    which subdivides every triangle and took 15 s and several GB on one PartNet microwave; this takes 0.5-12 s on
+    the samples at 4 mm. Cracks narrower than a voxel are closed and walls thinner than one are thickened.
     """
-    vox = mesh.voxelized(pitch).fill()
-    out = vox.marching_cubes
-    out.apply_transform(vox.transform)
-    # marching_cubes on a padded grid already yields a closed surface; fix winding so volume is positive.
+    lo, hi = mesh.bounds
+    origin = lo - 2 * pitch
+    shape = np.ceil((hi - lo) / pitch).astype(int) + 5
+    count = int(mesh.area / (0.5 * pitch) ** 2) + 1000
+    points, _ = trimesh.sample.sample_surface(mesh, count, seed=0)
+    idx = np.floor((np.concatenate([points, mesh.vertices]) - origin) / pitch).astype(int)
+    wall = np.zeros(shape, bool)
+    wall[idx[:, 0], idx[:, 1], idx[:, 2]] = True
+    solid = ndimage.binary_fill_holes(wall)
+    verts, faces, _, _ = marching_cubes(solid.astype(np.float32), 0.5, spacing=(pitch,) * 3)
+    out = trimesh.Trimesh(verts + origin + 0.5 * pitch, faces, process=True)
     trimesh.repair.fix_normals(out)
     return out
