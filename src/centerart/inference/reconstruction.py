@@ -4,18 +4,22 @@ Coarse-to-fine (never a dense pass at the final resolution):
 
 1. evaluate the network on a coarse lattice (``coarse_resolution`` cells along the longest side of the box);
 2. a cell is *active* when one of its corners has |sdf| below ``band`` cell diagonals or its corners change
-   sign (a distance field crossing zero inside a cell has a corner within half a diagonal); optionally dilated;
-3. double the resolution: values everywhere start as the trilinear upsampling of the previous level; inside the
-   active coarse cells, the network is evaluated at the corners of the fine cells that the interpolated values
-   put within ``fine_band`` fine diagonals of zero; then, in rounds, at the corners of every fine cell that straddles
-   zero but still has interpolated corners, until every such cell is fully evaluated;
+   sign (Lipschitz pruning: a distance field crossing zero inside a cell has a corner within half a diagonal);
+3. double the resolution: values everywhere start as the trilinear upsampling of the previous level, and points
+   of the coarser lattice keep their evaluated values (never evaluated twice). Up to ``exhaustive_resolution``
+   every corner of the active cells is evaluated (this finds thin walls the coarse lattice stepped over). Above
+   it, inside the active coarse cells, the network is evaluated at the corners of the fine cells that the
+   interpolated values put within ``fine_band`` fine diagonals of zero; then, in rounds (one batched network call
+   each), at the corners of every fine cell that straddles zero but still has interpolated corners, until every
+   such cell is fully evaluated;
 4. repeat to ``resolution``, then run marching cubes (skimage) on the final lattice.
 
 Away from the surface the upsampled values keep the sign of the coarse corners (no sign change in an inactive
 cell, and trilinear interpolation of same-sign corners keeps that sign), so marching cubes finds the zero level
 set only where the network was evaluated at full resolution: the mesh equals the dense mesh wherever the band
 covers the surface. The final level's evaluated points and the full network outputs there (SDF and grasps) are
-returned for grasp extraction, at no extra cost.
+returned for grasp extraction, at no extra cost (``Reconstruction.points``: every final-level point the
+refinement needed, whether evaluated at that level or reused from a coarser one).
 """
 
 from __future__ import annotations
@@ -78,7 +82,7 @@ class MeshConfig:
 @dataclass
 class Reconstruction:
     mesh: trimesh.Trimesh
-    points: np.ndarray  # (M, 3) final-level evaluated points
+    points: np.ndarray  # (M, 3) final-level points with network values (evaluated there or reused)
     sdf: np.ndarray  # (M,)
     raw: np.ndarray | None  # (M, 10) decoder outputs there (None for analytic fields)
     stats: dict = field(default_factory=dict)
