@@ -5,12 +5,14 @@ Measures (CPU, ``--threads`` torch threads):
 - ``training``: optimisation steps/s and points/s of the auto-decoder loss (forward + backward + Adam) for the
   ``tiny`` and ``small`` presets at 16384 points per step;
 - ``meshing``: per training object of the checkpoint at the given joint codes, coarse-to-fine mesh + grasp extraction
-  time against one dense 128^3 evaluation of the same network + marching cubes, network evaluations of each, and
-  Chamfer-L1 (mm) of both meshes against the true mesh (``ArticulatedObject.watertight_mesh``);
+  time against one dense 128^3 evaluation of the same network + marching cubes, network evaluations of each,
+  Chamfer-L1 (mm) of both meshes against the true mesh (``ArticulatedObject.watertight_mesh``) and between the
+  coarse-to-fine and the dense mesh;
 - ``evaluation``: the summary of an ``centerart eval decoder`` report, when ``--eval-report`` is given.
 
 Usage::
 
+    centerart objects generate --category all --count 3 --seed 0 --out /tmp/objects   # the checkpoint's objects
     PYTHONPATH=src nice python benchmarks/decoder_bench.py --objects /tmp/objects --n-objects 3 \
         --eval-report /tmp/eval/report.json > decoder_bench.json
 """
@@ -83,6 +85,7 @@ def bench_meshing(checkpoint, objects: Path, n_objects: int, joint_codes: list[f
             true = obj.watertight_mesh(obj.denormalize(u))
             cd_c2f, f_c2f = chamfer_fscore(rec.mesh, true)
             cd_dense, f_dense = chamfer_fscore(dense.mesh, true)
+            cd_between, _ = chamfer_fscore(rec.mesh, dense.mesh)
             rows.append(
                 {
                     "object": oid,
@@ -94,6 +97,7 @@ def bench_meshing(checkpoint, objects: Path, n_objects: int, joint_codes: list[f
                     "dense_network_points": dense.stats["evaluated_points"],
                     "chamfer_mm_c2f": cd_c2f,
                     "chamfer_mm_dense": cd_dense,
+                    "chamfer_mm_c2f_vs_dense": cd_between,
                     "fscore_c2f": f_c2f,
                     "fscore_dense": f_dense,
                     "grasps": len(grasps),
