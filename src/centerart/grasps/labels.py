@@ -25,14 +25,14 @@ failed_displacement (M,)        their signed joint motion
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from centerart.errors import CenterArtError
-from centerart.utils.atomic import atomic_write_bytes
+from centerart.utils.npz_records import load_record, save_record
+from centerart.utils.npz_records import state_file as state_path
 
 
 @dataclass
@@ -53,47 +53,16 @@ class StateLabels:
         return len(self.poses)
 
     def save(self, folder: Path) -> Path:
-        path = state_path(folder, self.object_id, self.state_index)
-        buf = io.BytesIO()
-        np.savez_compressed(
-            buf,
-            object_id=np.array(self.object_id),
-            state_index=np.array(self.state_index),
-            q=np.array(self.q),
-            q_normalized=np.array(self.q_normalized),
-            joint_type=np.array(self.joint_type),
-            direction=np.array(self.direction),
-            poses=np.asarray(self.poses, np.float32).reshape(-1, 4, 4),
-            displacement=np.asarray(self.displacement, np.float32),
-            failed_poses=np.asarray(self.failed_poses, np.float32).reshape(-1, 4, 4),
-            failed_displacement=np.asarray(self.failed_displacement, np.float32),
+        return save_record(
+            state_path(folder, self.object_id, self.state_index),
+            self,
+            compressed=True,
+            shapes={"poses": (-1, 4, 4), "failed_poses": (-1, 4, 4)},
         )
-        atomic_write_bytes(path, buf.getvalue())
-        return path
 
     @classmethod
     def load(cls, path: Path) -> StateLabels:
-        path = Path(path)
-        try:
-            with np.load(path) as d:
-                return cls(
-                    object_id=str(d["object_id"]),
-                    state_index=int(d["state_index"]),
-                    q=float(d["q"]),
-                    q_normalized=float(d["q_normalized"]),
-                    joint_type=str(d["joint_type"]),
-                    direction=int(d["direction"]),
-                    poses=d["poses"].astype(np.float64),
-                    displacement=d["displacement"].astype(np.float64),
-                    failed_poses=d["failed_poses"].astype(np.float64),
-                    failed_displacement=d["failed_displacement"].astype(np.float64),
-                )
-        except (OSError, KeyError, ValueError) as err:
-            raise CenterArtError(f"{path}: not a readable grasp-label file ({err})") from None
-
-
-def state_path(folder: Path, object_id: str, state_index: int) -> Path:
-    return Path(folder) / object_id / f"state_{state_index:02d}.npz"
+        return load_record(cls, path, "grasp-label", dtype=np.float64)
 
 
 def load_object_labels(folder: Path, object_id: str) -> list[StateLabels]:

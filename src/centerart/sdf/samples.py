@@ -27,14 +27,14 @@ grasp_distance  (N,)        distance from the point to that grasp's TCP position
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from centerart.errors import CenterArtError
-from centerart.utils.atomic import atomic_write_bytes
+from centerart.utils.npz_records import load_record, save_record
+from centerart.utils.npz_records import state_file as sample_path
 
 
 @dataclass
@@ -54,45 +54,11 @@ class SdfSamples:
         return bool(np.isfinite(self.grasp_distance).any())
 
     def save(self, folder: Path) -> Path:
-        path = sample_path(folder, self.object_id, self.state_index)
-        buf = io.BytesIO()
-        np.savez(
-            buf,
-            object_id=np.array(self.object_id),
-            state_index=np.array(self.state_index),
-            q=np.array(self.q),
-            q_normalized=np.array(self.q_normalized),
-            joint_type=np.array(self.joint_type),
-            points=np.asarray(self.points, np.float32),
-            sdf=np.asarray(self.sdf, np.float32),
-            grasp_points=np.asarray(self.grasp_points, np.float32),
-            grasp_distance=np.asarray(self.grasp_distance, np.float32),
-        )
-        atomic_write_bytes(path, buf.getvalue())
-        return path
+        return save_record(sample_path(folder, self.object_id, self.state_index), self)
 
     @classmethod
     def load(cls, path: Path) -> SdfSamples:
-        path = Path(path)
-        try:
-            with np.load(path) as d:
-                return cls(
-                    object_id=str(d["object_id"]),
-                    state_index=int(d["state_index"]),
-                    q=float(d["q"]),
-                    q_normalized=float(d["q_normalized"]),
-                    joint_type=str(d["joint_type"]),
-                    points=d["points"],
-                    sdf=d["sdf"],
-                    grasp_points=d["grasp_points"],
-                    grasp_distance=d["grasp_distance"],
-                )
-        except (OSError, KeyError, ValueError) as err:
-            raise CenterArtError(f"{path}: not a readable SDF sample file ({err})") from None
-
-
-def sample_path(folder: Path, object_id: str, state_index: int) -> Path:
-    return Path(folder) / object_id / f"state_{state_index:02d}.npz"
+        return load_record(cls, path, "SDF sample")
 
 
 def list_sample_files(folder: Path) -> list[Path]:
