@@ -22,20 +22,29 @@ def scene_objects(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="session")
-def kitchen_dataset(tmp_path_factory, scene_objects) -> Path:
+def kitchen_config(scene_objects):
+    """The kitchen set's config (seed 5, stereo depth, tiny images) for a given output folder and scene count."""
+
+    def make(out: Path, count: int = 2) -> GenerateScenesConfig:
+        return GenerateScenesConfig(
+            objects=scene_objects,
+            out=out,
+            layout="kitchen",
+            count=count,
+            views_per_scene=2,
+            seed=5,
+            depth="stereo",
+            intrinsics="tiny",
+            workers=1,
+        )
+
+    return make
+
+
+@pytest.fixture(scope="session")
+def kitchen_dataset(tmp_path_factory, kitchen_config) -> Path:
     out = tmp_path_factory.mktemp("kitchen")
-    cfg = GenerateScenesConfig(
-        objects=scene_objects,
-        out=out,
-        layout="kitchen",
-        count=2,
-        views_per_scene=2,
-        seed=5,
-        depth="stereo",
-        intrinsics="tiny",
-        workers=1,
-    )
-    generate_scenes(cfg)
+    generate_scenes(kitchen_config(out))
     return out
 
 

@@ -45,38 +45,18 @@ def test_dataset_files_and_manifest(kitchen_dataset):
         assert tex is None or (scene_dir / tex).is_file()
 
 
-def test_resume_skips_finished_scenes(kitchen_dataset, scene_objects):
+def test_resume_skips_finished_scenes(kitchen_dataset, kitchen_config):
     rgb = list_views(kitchen_dataset)[0] / "rgb.png"
     before = rgb.stat().st_mtime_ns
-    cfg = GenerateScenesConfig(
-        objects=scene_objects,
-        out=kitchen_dataset,
-        layout="kitchen",
-        count=2,
-        views_per_scene=2,
-        seed=5,
-        depth="stereo",
-        intrinsics="tiny",
-        workers=1,
-    )
+    cfg = kitchen_config(kitchen_dataset, count=2)
     result = generate_scenes(cfg)
     assert all(r["resumed"] for r in result["scenes"])
     assert rgb.stat().st_mtime_ns == before
 
 
-def test_rendering_is_deterministic(kitchen_dataset, scene_objects, tmp_path):
+def test_rendering_is_deterministic(kitchen_dataset, kitchen_config, tmp_path):
     """Re-rendering scene 0 from scratch gives the same images and labels (same process, same seed)."""
-    cfg = GenerateScenesConfig(
-        objects=scene_objects,
-        out=tmp_path,
-        layout="kitchen",
-        count=1,
-        views_per_scene=2,
-        seed=5,
-        depth="stereo",
-        intrinsics="tiny",
-        workers=1,
-    )
+    cfg = kitchen_config(tmp_path, count=1)
     generate_scenes(cfg)
     for name in ("rgb.png", "depth_true.png", "depth_realistic.png", "instances.png"):
         a = np.asarray(Image.open(kitchen_dataset / "scene_000000/views/00" / name))
