@@ -5,15 +5,19 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
+from centerart.assets.mesh_ops import from_manifold, to_manifold
 from centerart.sdf.sampling import SamplingConfig, sample_points, signed_distance
 from centerart.sdf.signs import (
     flood_fill_inside,
+    flood_pitch,
     ray_escape_inside,
     ray_parity_inside,
     raycasting_scene,
+    soup_escape_inside,
+    soup_flood_fill_inside,
     winding_number,
 )
-from centerart.sdf.surface import dedupe_soup
+from centerart.sdf.surface import ObjectSurface, dedupe_soup
 
 HALF = np.array([0.3, 0.2, 0.1])
 
@@ -28,7 +32,7 @@ def test_box_sdf_matches_closed_form():
     rng = np.random.default_rng(0)
     cfg = SamplingConfig(check_points=2_000)
     pts = sample_points(box, 20_000, cfg, rng)
-    res = signed_distance(box, True, pts, cfg, rng)
+    res = signed_distance(ObjectSurface(box, True), pts, cfg, rng)
     assert res.points.shape == (20_000, 3) and res.sdf.dtype == np.float32
     np.testing.assert_allclose(res.sdf, box_sdf(res.points.astype(float)), atol=1e-5)
     assert res.sign_agreement == 1.0
@@ -50,9 +54,9 @@ def test_sphere_sdf_and_methods_agree():
     assert (ray_parity_inside(scene, pts) == truth).all()
     assert ((winding_number(sphere, pts) > 0.5) == truth).all()
     assert (ray_escape_inside(scene, pts) == truth).all()
-    inside = flood_fill_inside(sphere, scene, pts, pts.min(0) - 0.05, pts.max(0) + 0.05, cells=96)
+    inside = flood_fill_inside(sphere, scene, pts, pts.min(0) - 0.05, pts.max(0) + 0.05, pitch=0.9 / 96)
     assert (inside == truth).mean() > 0.999
-    res = signed_distance(sphere, True, pts, SamplingConfig(check_points=1000), rng)
+    res = signed_distance(ObjectSurface(sphere, True), pts, SamplingConfig(check_points=1000), rng)
     np.testing.assert_allclose(res.sdf, r - 0.25, atol=1.5e-3)
 
 
@@ -67,7 +71,7 @@ def test_soup_of_double_sided_box_signs_like_a_solid():
     rng = np.random.default_rng(2)
     cfg = SamplingConfig(check_points=5_000, soup_shell=0.002)
     pts = sample_points(clean, 20_000, cfg, rng)
-    res = signed_distance(clean, False, pts, cfg, rng)
+    res = signed_distance(ObjectSurface(clean, False, [clean]), pts, cfg, rng)
     truth = box_sdf(res.points.astype(float)) - 0.002
     decided = np.abs(truth) > 0.001
     assert ((res.sdf < 0) == (truth < 0))[decided].mean() > 0.995
@@ -80,7 +84,63 @@ def test_open_sheet_gets_a_shell():
     sheet = trimesh.Trimesh([[0, -0.2, -0.2], [0, 0.2, -0.2], [0, 0.2, 0.2], [0, -0.2, 0.2]], [[0, 1, 2], [0, 2, 3]])
     pts = np.array([[0.001, 0, 0], [-0.001, 0.05, 0], [0.01, 0, 0], [-0.05, 0, 0.1], [0.3, 0.3, 0.3]])
     cfg = SamplingConfig(check_points=5, soup_shell=0.002)
-    res = signed_distance(sheet, False, pts, cfg, np.random.default_rng(0))
+    res = signed_distance(ObjectSurface(sheet, False, [sheet]), pts, cfg, np.random.default_rng(0))
     np.testing.assert_allclose(
         res.sdf, [-0.001, -0.001, 0.008, 0.048, np.linalg.norm([0.3, 0.1, 0.1]) - 0.002], atol=1e-5
     )
+
+
+def _double_sided(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    tri = mesh.vertices[mesh.faces]
+    both = np.concatenate([tri, tri[:, ::-1]])
+    return dedupe_soup(trimesh.Trimesh(both.reshape(-1, 3), np.arange(len(both) * 3).reshape(-1, 3), process=False))
+
+
+def _board(lo, hi) -> trimesh.Trimesh:
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    return _double_sided(trimesh.creation.box(bounds=[lo, hi]))
+
+
+def test_closed_cabinet_soup_keeps_its_cavity_empty():
+    """Five 2 cm boards and a closed door, each a separate soup piece (as PartNet-Mobility parts): the space
+    they enclose is air, the boards are solid, with both sign methods. Signing the whole soup at once would
+    call the cavity solid (no ray escapes it)."""
+    t = 0.02
+    pieces = [
+        _board([-0.2, -0.3, -0.3], [-0.2 + t, 0.3, 0.3]),  # back
+        _board([-0.2, -0.3, -0.3], [0.2, -0.3 + t, 0.3]),  # sides
+        _board([-0.2, 0.3 - t, -0.3], [0.2, 0.3, 0.3]),
+        _board([-0.2, -0.3, -0.3], [0.2, 0.3, -0.3 + t]),  # bottom, top
+        _board([-0.2, -0.3, 0.3 - t], [0.2, 0.3, 0.3]),
+        _board([0.2, -0.3, -0.3], [0.2 + t, 0.3, 0.3]),  # door, closed
+    ]
+    cavity = np.random.default_rng(0).uniform([-0.17, -0.27, -0.27], [0.19, 0.27, 0.27], (500, 3))
+    in_boards = np.array([[-0.19, 0.0, 0.0], [0.0, -0.29, 0.1], [0.0, 0.0, 0.29], [0.21, 0.1, -0.1]])
+    pts = np.concatenate([cavity, in_boards])
+    truth = np.r_[np.zeros(len(cavity), bool), np.ones(len(in_boards), bool)]
+    assert (soup_escape_inside(pieces, pts) == truth).all()
+    assert (soup_flood_fill_inside(pieces, pts) == truth).all()
+    whole = dedupe_soup(trimesh.util.concatenate(pieces))
+    assert ray_escape_inside(raycasting_scene(whole), cavity).all()  # why the signs are taken part by part
+
+
+def test_flood_pitch_resolves_thin_boards_within_the_voxel_cap():
+    board = np.array([1.0, 0.6, 0.018])
+    pitch = flood_pitch(board, cells=256, thin_cells=12, max_voxels=4e6)
+    assert pitch <= 0.018 / 6 and np.prod(np.ceil(board / pitch)) <= 4.2e6
+    assert abs(flood_pitch(np.array([0.5, 0.5, 0.5]), 256, 12, 1e9) - 0.5 / 256) < 1e-12
+
+
+def test_escape_needs_min_escaping_rays():
+    """A hollow box with a 4 cm hole in its 2 cm thick top: from the centre the hole is a small target (about
+    one ray in 256), so asking for several escaping rays counts it as closed; just below the hole it is not."""
+    box = trimesh.creation.box(extents=[0.4, 0.4, 0.4])
+    hole = trimesh.creation.box(extents=[0.04, 0.04, 0.1])
+    hole.apply_translation([0.0, 0.0, 0.2])
+    cavity = trimesh.creation.box(extents=[0.36, 0.36, 0.36])
+    shell = from_manifold(to_manifold(box) - to_manifold(cavity) - to_manifold(hole))
+    scene = raycasting_scene(shell)
+    centre = np.zeros((1, 3))
+    assert ray_escape_inside(scene, centre, rays=256, min_escaping=4)[0]
+    near_hole = np.array([[0.0, 0.0, 0.17]])
+    assert not ray_escape_inside(scene, near_hole, rays=256, min_escaping=4)[0]

@@ -89,10 +89,13 @@ def _plan(cfg: GenerateSdfConfig) -> list[_Item]:
         raise CenterArtError("--sampling.near-fraction and --sampling.far-fraction must be >= 0 and sum to <= 1")
     if s.parity_rays < 1 or s.parity_rays % 2 == 0:
         raise CenterArtError(f"--sampling.parity-rays must be odd and >= 1, got {s.parity_rays}")
-    if s.escape_rays < 1 or s.flood_cells < 8 or s.check_points < 1:
+    if s.escape_rays < 1 or s.flood_cells < 8 or s.flood_thin_cells < 2 or s.check_points < 1:
         raise CenterArtError(
-            "--sampling.escape-rays, --sampling.flood-cells (>= 8), --sampling.check-points must be positive"
+            "--sampling.escape-rays, --sampling.flood-cells (>= 8), --sampling.flood-thin-cells (>= 2), "
+            "--sampling.check-points must be positive"
         )
+    if s.flood_max_voxels < 1000 or s.escape_min_rays < 1:
+        raise CenterArtError("--sampling.flood-max-voxels must be >= 1000 and --sampling.escape-min-rays >= 1")
     items = []
     for folder in list_objects(objects_dir):
         oid = folder.name
@@ -162,9 +165,9 @@ def _generate_one_unchecked(item: _Item) -> dict:
         u = 0.5 if item.n_states == 1 else item.state_index / (item.n_states - 1)
         q, poses = obj.denormalize(u), np.zeros((0, 4, 4))
     rng = item_rng(item.seed, item.object_id, item.state_index)
-    mesh, closed = object_surface(obj, q)
-    points = sample_points(mesh, item.points, item.sampling, rng)
-    signed = signed_distance(mesh, closed, points, item.sampling, rng)
+    surface = object_surface(obj, q)
+    points = sample_points(surface.mesh, item.points, item.sampling, rng)
+    signed = signed_distance(surface, points, item.sampling, rng)
     t_sdf = time.perf_counter() - started
     t0 = time.perf_counter()
     grasp_points, grasp_distance = nearest_grasp_targets(signed.points, poses)
@@ -184,8 +187,9 @@ def _generate_one_unchecked(item: _Item) -> dict:
         "object_id": item.object_id,
         "state_index": item.state_index,
         "q": q,
-        "closed_mesh": closed,
-        "triangles": len(mesh.faces),
+        "closed_mesh": surface.closed,
+        "triangles": len(surface.mesh.faces),
+        "soup_pieces": len(surface.pieces),
         "points": len(signed.points),
         "inside_fraction": float(np.mean(signed.sdf < 0)),
         "sign_method": signed.sign_method,

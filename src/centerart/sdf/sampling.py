@@ -25,12 +25,13 @@ import open3d as o3d
 import trimesh
 
 from centerart.sdf.signs import (
-    flood_fill_inside,
-    ray_escape_inside,
     ray_parity_inside,
     raycasting_scene,
+    soup_escape_inside,
+    soup_flood_fill_inside,
     winding_number,
 )
+from centerart.sdf.surface import ObjectSurface
 
 
 @dataclass
@@ -51,8 +52,14 @@ class SamplingConfig:
     """Rays voting on ray parity (closed meshes; odd)."""
     escape_rays: int = 256
     """Rays of the escape test (soups' sign)."""
+    escape_min_rays: int = 1
+    """A soup point is outside when at least this many of the escape rays leave the piece without a hit."""
     flood_cells: int = 256
-    """Voxels along the longest side of the flood-fill grid (soups' check)."""
+    """Voxels along the longest side of each soup piece's flood-fill grid (soups' check)."""
+    flood_thin_cells: int = 12
+    """At least this many voxels across a piece's thinnest side (so boards have an interior)."""
+    flood_max_voxels: int = 4_000_000
+    """Cap on one piece's grid (bounds memory and time; coarsens the pitch of large pieces)."""
     soup_shell: float = 0.002
     """m, half-thickness given to triangle soups (0 for closed meshes)."""
     check_points: int = 10_000
@@ -87,23 +94,28 @@ def sample_points(mesh: trimesh.Trimesh, count: int, cfg: SamplingConfig, rng: n
 
 
 def signed_distance(
-    mesh: trimesh.Trimesh, closed: bool, points: np.ndarray, cfg: SamplingConfig, rng: np.random.Generator
+    surface: ObjectSurface, points: np.ndarray, cfg: SamplingConfig, rng: np.random.Generator
 ) -> SignedSamples:
-    """SDF of ``points`` w.r.t. ``mesh`` plus the sign agreement with the independent second method."""
+    """SDF of ``points`` w.r.t. ``surface`` plus the sign agreement with the independent second method."""
     points = np.asarray(points, np.float32)
+    mesh = surface.mesh
     scene = raycasting_scene(mesh)
     dist = scene.compute_distance(o3d.core.Tensor(points)).numpy().astype(np.float64)
     check_idx = np.sort(rng.choice(len(points), min(cfg.check_points, len(points)), replace=False))
-    if closed:
+    if surface.closed:
         inside = ray_parity_inside(scene, points, cfg.parity_rays)
         check_inside = winding_number(mesh, points[check_idx]) > 0.5
         shell, methods = 0.0, ("ray_parity", "winding_number")
     else:
-        inside = ray_escape_inside(scene, points, cfg.escape_rays)
-        lo = np.minimum(mesh.bounds[0], points.min(0)) - cfg.padding
-        hi = np.maximum(mesh.bounds[1], points.max(0)) + cfg.padding
-        check_inside = flood_fill_inside(mesh, scene, points[check_idx], lo, hi, cfg.flood_cells)
-        shell, methods = cfg.soup_shell, ("ray_escape", "flood_fill")
+        inside = soup_escape_inside(surface.pieces, points, cfg.escape_rays, cfg.escape_min_rays)
+        check_inside = soup_flood_fill_inside(
+            surface.pieces,
+            points[check_idx],
+            cfg.flood_cells,
+            cfg.flood_thin_cells,
+            cfg.flood_max_voxels,
+        )
+        shell, methods = cfg.soup_shell, ("ray_escape_per_part", "flood_fill_per_part")
     sdf = np.where(inside, -dist, dist) - shell
     # Agreement on the sign of the final field: within the shell both methods give a negative value.
     check_sdf = np.where(check_inside, -dist[check_idx], dist[check_idx]) - shell

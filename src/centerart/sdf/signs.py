@@ -11,17 +11,19 @@ Closed meshes (generated objects, exact union of closed parts):
 Triangle soups (real PartNet-Mobility meshes: open sheets, double-sided walls, overlaps, cracks). Ray parity is
 useless there: on the sample objects the seeded rays of one point disagree for 20-75% of the points, because a
 single open sheet flips parity. Winding numbers need an orientation the soups lack (their double-sided walls
-give 0 everywhere). So:
+give 0 everywhere). Both soup methods work part by part (one piece per named part of a link, see the comment
+above :func:`soup_escape_inside`): a point is inside the object when it is inside one of its parts.
 
-- sign: :func:`ray_escape_inside`, a point is outside when at least one of many evenly spread rays leaves the
-  scene without a hit, i.e. when it can be seen from outside: the visibility convention of DeepSDF-style data
+- sign: :func:`ray_escape_inside`, a point is outside a piece when at least one of many evenly spread rays leaves
+  it without a hit, i.e. when it can be seen from outside: the visibility convention of DeepSDF-style data
   (depth scans from a sphere of cameras) on exact geometry, so closed boards thinner than any voxel stay solid.
   The SDF gives every sheet a thin shell (see :mod:`centerart.sdf.sampling`), so open sheets have an inside too.
-- check: :func:`flood_fill_inside`, empty space the flood from the grid border cannot reach is inside; points in
-  the voxel band around the surface take the label of the first empty voxel found by walking away from their
-  nearest surface point. Voxels and connectivity, no rays. The two disagree where a soup is ambiguous: bodies
-  whose gaps are wider than the flood's closing but let few straight rays through (flood: outside, escape:
-  inside), sheltered pockets reached by a bent path only, and boards thinner than the voxel band.
+- check: :func:`flood_fill_inside`, empty space the flood from the grid border cannot reach is inside, on a grid
+  per piece fine enough to give its thinnest side an interior (:func:`flood_pitch`); points in wall voxels take
+  the label of the first empty voxel found by walking away from their nearest surface point. Voxels and
+  connectivity, no rays. The two disagree where a piece is ambiguous: a door drawn as a slab with cracks or an
+  open back wider than the flood's one-voxel closing but seen by few straight rays (flood: outside, escape:
+  inside), sheltered pockets reached by a bent path only.
 """
 
 from __future__ import annotations
@@ -78,23 +80,30 @@ def ray_parity_inside(
 
 
 def ray_escape_inside(
-    scene: o3d.t.geometry.RaycastingScene, points: np.ndarray, rays: int = 256, seed: int = 1, chunk: int = 20_000
+    scene: o3d.t.geometry.RaycastingScene,
+    points: np.ndarray,
+    rays: int = 256,
+    seed: int = 1,
+    min_escaping: int = 1,
+    chunk: int = 20_000,
 ) -> np.ndarray:
-    """Inside (bool per point) unless one of ``rays`` evenly spread rays leaves without a hit. For soups.
+    """Inside (bool per point) unless at least ``min_escaping`` of ``rays`` evenly spread rays leave without a hit.
 
-    Most outside points escape along one of the first few directions, so every point first tries a spread
-    subset of 32 rays and only the points still enclosed try the rest."""
+    ``min_escaping`` > 1 makes a crack that only a ray or two find count as closed. Most outside points escape
+    along several of the first few directions, so every point first tries a spread subset of 32 rays and only
+    the points still undecided try the rest."""
     dirs = ray_directions(rays, seed).astype(np.float32)
-    first, rest = dirs[:: max(1, rays // 32)], np.delete(dirs, np.arange(0, rays, max(1, rays // 32)), axis=0)
+    stride = max(1, rays // 32)
+    first, rest = dirs[::stride], np.delete(dirs, np.arange(0, rays, stride), axis=0)
     points = np.asarray(points, np.float32)
     inside = np.zeros(len(points), bool)
     for s in range(0, len(points), chunk):
         p = points[s : s + chunk]
-        enclosed = scene.test_occlusions(_ray_tensor(p, first)).numpy().all(axis=1)
-        if len(rest) and enclosed.any():
-            idx = np.flatnonzero(enclosed)
-            enclosed[idx] = scene.test_occlusions(_ray_tensor(p[idx], rest)).numpy().all(axis=1)
-        inside[s : s + chunk] = enclosed
+        escaping = (~scene.test_occlusions(_ray_tensor(p, first)).numpy()).sum(axis=1)
+        todo = np.flatnonzero(escaping < min_escaping)
+        if len(rest) and len(todo):
+            escaping[todo] += (~scene.test_occlusions(_ray_tensor(p[todo], rest)).numpy()).sum(axis=1)
+        inside[s : s + chunk] = escaping < min_escaping
     return inside
 
 
@@ -123,8 +132,13 @@ def winding_number(mesh: trimesh.Trimesh, points: np.ndarray, block: int = 200_0
 
 @dataclass
 class FloodFill:
-    """Exterior flood fill of a voxelised surface: ``wall`` voxels hold the surface (grown by one voxel so no
-    diagonal gap lets the flood through), ``outside`` empty voxels are reachable from the grid border."""
+    """Exterior flood fill of a voxelised surface with a morphological closing of ``grow`` voxels.
+
+    ``wall`` voxels hold surface samples. The flood runs from the grid border through empty voxels after the walls
+    are grown by ``grow`` voxels, so cracks and holes narrower than about ``2 * grow`` voxels do not let it in; the
+    flooded region is then grown back by ``grow`` voxels (never through a wall voxel), so that the exterior again
+    reaches the walls. ``outside`` is that exterior: the complement of the closed solid.
+    """
 
     lo: np.ndarray
     pitch: float
@@ -133,21 +147,22 @@ class FloodFill:
 
     @classmethod
     def build(
-        cls, mesh: trimesh.Trimesh, lo: np.ndarray, hi: np.ndarray, cells: int, grow: int = 1, seed: int = 0
+        cls, mesh: trimesh.Trimesh, lo: np.ndarray, hi: np.ndarray, pitch: float, grow: int = 1, seed: int = 0
     ) -> FloodFill:
-        pitch = float((hi - lo).max()) / cells
-        shape = np.ceil((hi - lo) / pitch).astype(int) + 1
+        shape = np.ceil((np.asarray(hi) - lo) / pitch).astype(int) + 1
         # Surface samples a third of a voxel apart mark every voxel a triangle passes through.
         count = int(min(8e6, max(1e4, 9.0 * mesh.area / pitch**2)))
         surface, _ = trimesh.sample.sample_surface(mesh, count, seed=seed)
         wall = np.zeros(shape, bool)
         idx = np.clip(((np.concatenate([surface, mesh.vertices]) - lo) / pitch).astype(int), 0, shape - 1)
         wall[idx[:, 0], idx[:, 1], idx[:, 2]] = True
-        wall = ndimage.binary_dilation(wall, structure=np.ones((3, 3, 3), bool), iterations=grow)
-        labels, _ = ndimage.label(~wall)  # 6-connected empty regions
+        cube = np.ones((3, 3, 3), bool)
+        grown = ndimage.binary_dilation(wall, structure=cube, iterations=grow)
+        labels, _ = ndimage.label(~grown)  # 6-connected empty regions
         faces = [labels[0], labels[-1], labels[:, 0], labels[:, -1], labels[:, :, 0], labels[:, :, -1]]
         border = np.unique(np.concatenate([f.ravel() for f in faces]))
         outside = np.isin(labels, border[border > 0])
+        outside = ndimage.binary_dilation(outside, structure=cube, iterations=grow, mask=~wall)
         return cls(np.asarray(lo, float), pitch, wall, outside)
 
     def index(self, points: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -155,7 +170,7 @@ class FloodFill:
         return idx[:, 0], idx[:, 1], idx[:, 2]
 
     def classify(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(inside, decided)``: decided points lie in empty voxels."""
+        """``(inside, decided)``: decided points lie in voxels without surface."""
         i = self.index(points)
         decided = ~self.wall[i]
         return decided & ~self.outside[i], decided
@@ -172,14 +187,14 @@ def flood_fill_inside(
     points: np.ndarray,
     lo: np.ndarray,
     hi: np.ndarray,
-    cells: int = 192,
+    pitch: float,
     grow: int = 1,
     seed: int = 0,
 ) -> np.ndarray:
-    """Inside (bool per point) by exterior flood fill on a grid over [lo, hi] with ``cells`` voxels along its
-    longest side. Band points walk from their nearest surface point away from it and take the label of the first
-    empty voxel; points whose walk stays in the band take the label of the empty voxel nearest to them."""
-    fill = FloodFill.build(mesh, lo, hi, cells, grow, seed)
+    """Inside (bool per point) by exterior flood fill (:class:`FloodFill`) on a grid of ``pitch`` m voxels over
+    [lo, hi]. Points in wall voxels walk from their nearest surface point away from it and take the label of the
+    first voxel without surface; points whose walk stays in the walls take the label of the nearest such voxel."""
+    fill = FloodFill.build(mesh, lo, hi, pitch, grow, seed)
     points = np.asarray(points, float)
     inside, decided = fill.classify(points)
     band = np.flatnonzero(~decided)
@@ -191,7 +206,7 @@ def flood_fill_inside(
         away = np.where(norm > 1e-9, away / np.maximum(norm, 1e-12), 0.0)
         label = np.zeros(len(band), bool)
         todo = np.ones(len(band), bool)
-        for step in np.arange(0.5, 2 * grow + 4.01, 0.5) * fill.pitch:
+        for step in np.arange(0.5, 4.01, 0.5) * fill.pitch:
             if not todo.any():
                 break
             probe = closest[todo] + away[todo] * step
@@ -215,4 +230,64 @@ def flood_fill_inside(
                     if not len(stuck):
                         break
         inside[band] = label
+    return inside
+
+
+# Triangle soups, part by part. A real object's solid is the union of its parts' solids: each named part of a
+# PartNet-Mobility link (a board, a door panel, a handle) is classified alone and a point is inside when it is
+# inside any of them. Classifying the whole soup at once would call every cavity enclosed by several parts solid
+# (a cabinet's interior behind a closed door, a compartment behind a fixed panel), and would change that with
+# the joint state as the door opens; generated objects (exact union of closed parts) keep those cavities empty.
+
+
+def _in_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.flatnonzero(np.all((points >= lo - 1e-4) & (points <= hi + 1e-4), axis=1))
+
+
+def soup_escape_inside(
+    pieces: list[trimesh.Trimesh], points: np.ndarray, rays: int = 256, min_escaping: int = 1, seed: int = 1
+) -> np.ndarray:
+    """:func:`ray_escape_inside` per piece, points inside any piece are inside. Only points within a piece's
+    bounding box can be inside it, so each point is tested against the few pieces around it."""
+    points = np.asarray(points, np.float32)
+    inside = np.zeros(len(points), bool)
+    for piece in pieces:
+        sel = _in_box(points, *piece.bounds)
+        if len(sel):
+            inside[sel] |= ray_escape_inside(raycasting_scene(piece), points[sel], rays, seed, min_escaping)
+    return inside
+
+
+def flood_pitch(extents: np.ndarray, cells: int, thin_cells: int, max_voxels: float) -> float:
+    """Voxel size (m) for a piece with bounding-box ``extents``: ``cells`` voxels along its longest side and at
+    least ``thin_cells`` across its thinnest (a 2 cm board must have an interior of empty voxels), but no more
+    than ``max_voxels`` voxels in all."""
+    ext = np.maximum(np.asarray(extents, float), 1e-3)
+    pitch = min(ext.max() / cells, ext.min() / thin_cells)
+    return float(max(pitch, (np.prod(ext) / max_voxels) ** (1.0 / 3.0)))
+
+
+def soup_flood_fill_inside(
+    pieces: list[trimesh.Trimesh],
+    points: np.ndarray,
+    cells: int = 256,
+    thin_cells: int = 12,
+    max_voxels: float = 4e6,
+    grow: int = 1,
+    seed: int = 0,
+) -> np.ndarray:
+    """:func:`flood_fill_inside` per piece on a grid sized by :func:`flood_pitch`, walls closed by ``grow``
+    voxels; points inside any piece are inside."""
+    points = np.asarray(points, float)
+    inside = np.zeros(len(points), bool)
+    for piece in pieces:
+        lo, hi = piece.bounds
+        sel = _in_box(points, lo, hi)
+        if not len(sel):
+            continue
+        pitch = flood_pitch(hi - lo, cells, thin_cells, max_voxels)
+        pad = (grow + 3) * pitch
+        inside[sel] |= flood_fill_inside(
+            piece, raycasting_scene(piece), points[sel], lo - pad, hi + pad, pitch, grow, seed
+        )
     return inside

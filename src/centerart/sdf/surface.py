@@ -4,10 +4,15 @@ Generated objects are built from closed manifold parts, so their surface is the 
 (closed, consistently oriented, no internal faces). Real PartNet-Mobility meshes are open triangle soups whose
 walls are usually drawn double-sided (every triangle twice, once per orientation): they are kept as they are
 (no voxel remesh, which costs seconds to minutes per state and blurs details finer than its pitch), with
-coincident duplicate triangles removed so that a wall counts as one crossing for ray parity.
+coincident duplicate triangles removed so that a wall counts as one crossing for ray parity. A soup also keeps
+its pieces, one per named part of each link, because its inside is decided part by part
+(:mod:`centerart.sdf.signs`).
 """
 
 from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass, field
 
 import numpy as np
 import trimesh
@@ -16,18 +21,33 @@ from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.mesh_ops import union
 
 
-def object_surface(obj: ArticulatedObject, q: float) -> tuple[trimesh.Trimesh, bool]:
-    """``(mesh, closed)``: the object's surface at target joint state ``q`` in the canonical frame.
+@dataclass
+class ObjectSurface:
+    """An object's surface at one joint state, canonical frame."""
 
-    ``closed`` is True when the mesh is the exact union of closed parts (generated objects), False for a soup.
-    """
-    parts = [p.mesh for p in obj.parts(q)]
-    if all(m.is_watertight for m in parts):
+    mesh: trimesh.Trimesh
+    """The whole surface: exact union (closed) or deduplicated soup."""
+    closed: bool
+    """True when ``mesh`` is the exact union of closed parts (generated objects), False for a soup."""
+    pieces: list[trimesh.Trimesh] = field(default_factory=list)
+    """Soups only: the deduplicated mesh of each named part of each link (PartNet-Mobility ``<visual name>``)."""
+
+
+def object_surface(obj: ArticulatedObject, q: float) -> ObjectSurface:
+    """The object's surface at target joint state ``q`` in the canonical frame."""
+    parts = obj.parts(q)
+    meshes = [p.mesh for p in parts]
+    if all(m.is_watertight for m in meshes):
         try:
-            return union(parts), True
+            return ObjectSurface(union(meshes), True)
         except ValueError:
             pass  # a part that trimesh calls watertight but manifold3d rejects: treat the object as a soup
-    return dedupe_soup(trimesh.util.concatenate(parts)), False
+    groups: dict[tuple[str, str], list[trimesh.Trimesh]] = defaultdict(list)
+    for p in parts:
+        groups[(p.link, p.name)].append(p.mesh)
+    pieces = [dedupe_soup(trimesh.util.concatenate(g)) for g in groups.values()]
+    pieces = [m for m in pieces if len(m.faces)]
+    return ObjectSurface(dedupe_soup(trimesh.util.concatenate(meshes)), False, pieces)
 
 
 def dedupe_soup(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
