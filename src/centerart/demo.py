@@ -10,8 +10,11 @@ Every step calls the same code as the stage commands, at a small scale.
 
 from __future__ import annotations
 
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
+
+_STEP_FOLDERS = ("objects", "oven", "grasps", "sdf", "kitchen")
 
 
 @dataclass
@@ -38,6 +41,12 @@ def run_demo(cfg: DemoConfig) -> None:
     from centerart.viz.scenes_sheet import ShowScenesConfig, show_scenes
 
     out = Path(cfg.out)
+    # Start every run from scratch: the stage commands refuse to resume folders made with other settings (e.g.
+    # by an older version of this package), which is right for datasets but would stop a rerun of the demo.
+    # Only the demo's own subfolders are removed.
+    for name in _STEP_FOLDERS:
+        if (out / name).is_dir():
+            shutil.rmtree(out / name)
     pictures = []
     print("1/4 objects")
     objects = out / "objects"
