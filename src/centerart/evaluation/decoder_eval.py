@@ -39,6 +39,7 @@ from centerart.evaluation.metrics import (
 )
 from centerart.evaluation.metrics import (
     GRASP_MATCH_ANGLE_DEG,
+    grasp_matches,
 )
 from centerart.evaluation.metrics import (
     GRASP_MATCH_POSITION_M as GRASP_MATCH_DISTANCE,
@@ -81,16 +82,6 @@ def chamfer_fscore(pred, true, n: int = SURFACE_SAMPLES, threshold: float = FSCO
         return float("inf"), 0.0
     m = shape_metrics(pred, true, n, threshold, seed)
     return float(m.chamfer_l1_mm), float(m.fscore)
-
-
-def grasp_matches(pred: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """(P, L) bool: prediction p is within the match thresholds of label l (finger symmetry)."""
-    from centerart.evaluation.metrics import grasp_distances
-
-    if len(pred) == 0 or len(labels) == 0:
-        return np.zeros((len(pred), len(labels)), bool)
-    pos, ang = grasp_distances(pred, labels)
-    return (pos <= GRASP_MATCH_DISTANCE) & (ang <= GRASP_MATCH_ANGLE_DEG)
 
 
 # --------------------------------------------------------------------------------------- evaluation

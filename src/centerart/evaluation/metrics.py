@@ -124,7 +124,13 @@ def grasp_distance(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     return float(pos[0, 0]), float(ang[0, 0])
 
 
-def _matches(predictions, labels, position_m, angle_deg) -> np.ndarray:
+def grasp_matches(
+    predictions: np.ndarray,
+    labels: np.ndarray,
+    position_m: float = GRASP_MATCH_POSITION_M,
+    angle_deg: float = GRASP_MATCH_ANGLE_DEG,
+) -> np.ndarray:
+    """(P, L) bool: prediction p lies within the thresholds of label l (finger-swap symmetric)."""
     if len(predictions) == 0 or len(labels) == 0:
         return np.zeros((len(predictions), len(labels)), bool)
     pos, ang = grasp_distances(predictions, labels)
@@ -156,7 +162,7 @@ def grasp_precision_coverage(
     predictions = np.asarray(predictions, float).reshape(-1, 4, 4)
     labels = np.asarray(labels, float).reshape(-1, 4, 4)
     top = predictions if k is None else predictions[:k]
-    m = _matches(top, labels, position_m, angle_deg)
+    m = grasp_matches(top, labels, position_m, angle_deg)
     precision = float(m.any(axis=1).mean()) if len(top) else float("nan")
     coverage = float(m.any(axis=0).mean()) if len(labels) else float("nan")
     return GraspMetrics(precision, coverage, len(top) if k is None else k, len(top), len(labels), position_m, angle_deg)
@@ -172,7 +178,7 @@ def relaxed_success(
     prediction (None) or an object without labels is a failure, never left out."""
     if top_grasp is None:
         return False
-    return bool(_matches(np.asarray(top_grasp, float)[None], labels, position_m, angle_deg).any())
+    return bool(grasp_matches(np.asarray(top_grasp, float)[None], labels, position_m, angle_deg).any())
 
 
 def nearest_label_position_m(grasps: np.ndarray, labels: np.ndarray) -> np.ndarray:
