@@ -60,13 +60,17 @@ def test_sphere_sdf_and_methods_agree():
     np.testing.assert_allclose(res.sdf, r - 0.25, atol=1.5e-3)
 
 
+def _double_sided(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """A PartNet-style soup of ``mesh``: every face drawn twice (both orientations), vertices unmerged, then
+    deduplicated as :func:`object_surface` does."""
+    tri = mesh.vertices[mesh.faces]
+    both = np.concatenate([tri, tri[:, ::-1]])
+    return dedupe_soup(trimesh.Trimesh(both.reshape(-1, 3), np.arange(len(both) * 3).reshape(-1, 3), process=False))
+
+
 def test_soup_of_double_sided_box_signs_like_a_solid():
     """A PartNet-style soup: every box face drawn twice (both orientations), vertices unmerged."""
-    box = trimesh.creation.box(extents=2 * HALF)
-    tri = box.vertices[box.faces]
-    both = np.concatenate([tri, tri[:, ::-1]])
-    soup = trimesh.Trimesh(both.reshape(-1, 3), np.arange(len(both) * 3).reshape(-1, 3), process=False)
-    clean = dedupe_soup(soup)
+    clean = _double_sided(trimesh.creation.box(extents=2 * HALF))
     assert len(clean.faces) == 12
     rng = np.random.default_rng(2)
     cfg = SamplingConfig(check_points=5_000, soup_shell=0.002)
@@ -88,12 +92,6 @@ def test_open_sheet_gets_a_shell():
     np.testing.assert_allclose(
         res.sdf, [-0.001, -0.001, 0.008, 0.048, np.linalg.norm([0.3, 0.1, 0.1]) - 0.002], atol=1e-5
     )
-
-
-def _double_sided(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
-    tri = mesh.vertices[mesh.faces]
-    both = np.concatenate([tri, tri[:, ::-1]])
-    return dedupe_soup(trimesh.Trimesh(both.reshape(-1, 3), np.arange(len(both) * 3).reshape(-1, 3), process=False))
 
 
 def _board(lo, hi) -> trimesh.Trimesh:
