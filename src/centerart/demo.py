@@ -14,8 +14,6 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-_STEP_FOLDERS = ("objects", "oven", "grasps", "sdf", "kitchen")
-
 
 @dataclass
 class DemoConfig:
@@ -41,15 +39,15 @@ def run_demo(cfg: DemoConfig) -> None:
     from centerart.viz.scenes_sheet import ShowScenesConfig, show_scenes
 
     out = Path(cfg.out)
+    objects, one, grasps, sdf, scenes = (out / name for name in ("objects", "oven", "grasps", "sdf", "kitchen"))
     # Start every run from scratch: the stage commands refuse to resume folders made with other settings (e.g.
     # by an older version of this package), which is right for datasets but would stop a rerun of the demo.
     # Only the demo's own subfolders are removed.
-    for name in _STEP_FOLDERS:
-        if (out / name).is_dir():
-            shutil.rmtree(out / name)
+    for folder in (objects, one, grasps, sdf, scenes):
+        if folder.is_dir():
+            shutil.rmtree(folder)
     pictures = []
     print("1/4 objects")
-    objects = out / "objects"
     generate_objects(
         GenerateObjectsConfig(out=objects, category="all", count=cfg.count, seed=cfg.seed, workers=cfg.workers)
     )
@@ -57,9 +55,7 @@ def run_demo(cfg: DemoConfig) -> None:
 
     print("2/4 grasp labels (one oven, 3 joint states)")
     # The same seed gives the same oven_0000 as in the objects folder; a folder of its own keeps the run short.
-    one = out / "oven"
     generate_objects(GenerateObjectsConfig(out=one, category="oven", count=1, seed=cfg.seed, workers=1))
-    grasps = out / "grasps"
     generate_grasps(
         GenerateGraspsConfig(
             objects=one, out=grasps, states=3, per_state=60, max_trials=400, seed=cfg.seed, workers=cfg.workers
@@ -70,14 +66,12 @@ def run_demo(cfg: DemoConfig) -> None:
     )
 
     print("3/4 SDF samples and reconstruction with the shipped decoder")
-    sdf = out / "sdf"
     generate_sdf(
         GenerateSdfConfig(objects=one, grasps=grasps, out=sdf, points=20000, seed=cfg.seed, workers=cfg.workers)
     )
     pictures.append(show_decoder(ShowDecoderConfig(data=sdf, object="oven_0000", out=out / "reconstruction.png")))
 
     print("4/4 a kitchen scene with realistic depth")
-    scenes = out / "kitchen"
     generate_scenes(
         GenerateScenesConfig(
             objects=objects,
