@@ -8,6 +8,7 @@ import trimesh
 from centerart.assets.mesh_ops import from_manifold, to_manifold
 from centerart.sdf.sampling import SamplingConfig, sample_points, signed_distance
 from centerart.sdf.signs import (
+    encloses_volume,
     flood_fill_inside,
     flood_pitch,
     ray_escape_inside,
@@ -120,6 +121,18 @@ def test_closed_cabinet_soup_keeps_its_cavity_empty():
     assert (soup_flood_fill_inside(pieces, pts) == truth).all()
     whole = dedupe_soup(trimesh.util.concatenate(pieces))
     assert ray_escape_inside(raycasting_scene(whole), cavity).all()  # why the signs are taken part by part
+
+
+def test_flat_pieces_enclose_nothing_and_change_no_sign():
+    """A tilted zero-thickness pane is skipped by both soup methods (no inside, no grid); a 2 mm board is not."""
+    pane = trimesh.Trimesh([[0, -0.2, -0.2], [0, 0.2, -0.2], [0, 0.2, 0.2], [0, -0.2, 0.2]], [[0, 1, 2], [0, 2, 3]])
+    pane.apply_transform(trimesh.transformations.euler_matrix(0.3, 0.5, 0.7))
+    board = _board([-0.1, -0.1, -0.001], [0.1, 0.1, 0.001])
+    assert not encloses_volume(pane) and encloses_volume(board)
+    pts = np.random.default_rng(1).uniform(-0.25, 0.25, (400, 3))
+    for method in (soup_escape_inside, soup_flood_fill_inside):
+        assert not method([pane], pts).any()
+        assert (method([pane, board], pts) == method([board], pts)).all()
 
 
 def test_flood_pitch_resolves_thin_boards_within_the_voxel_cap():

@@ -21,9 +21,12 @@ above :func:`soup_escape_inside`): a point is inside the object when it is insid
 - check: :func:`flood_fill_inside`, empty space the flood from the grid border cannot reach is inside, on a grid
   per piece fine enough to give its thinnest side an interior (:func:`flood_pitch`); points in wall voxels take
   the label of the first empty voxel found by walking away from their nearest surface point. Voxels and
-  connectivity, no rays. The two disagree where a piece is ambiguous: a door drawn as a slab with cracks or an
-  open back wider than the flood's one-voxel closing but seen by few straight rays (flood: outside, escape:
-  inside), sheltered pockets reached by a bent path only.
+  connectivity, no rays. The two disagree where a piece is ambiguous: a slab of two sheets whose openings (a
+  slot for a handle, missing triangles, open board ends) are wider than the flood's one-voxel closing but seen
+  by few straight rays (flood: outside, escape: inside, as the real door or board), sheltered pockets reached
+  by a bent path only. ``benchmarks/sdf_sign_disagreement.py`` measures where; docs/sdf.md has the figures.
+
+Flat pieces (:func:`encloses_volume`) have no inside and are skipped by both.
 """
 
 from __future__ import annotations
@@ -250,6 +253,16 @@ def _in_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.flatnonzero(np.all((points >= lo - 1e-4) & (points <= hi + 1e-4), axis=1))
 
 
+def encloses_volume(piece: trimesh.Trimesh, tol: float = 1e-4) -> bool:
+    """False when all of the piece's vertices lie within ``tol`` m of one plane (a flat sheet: a glass pane, a
+    back panel drawn as one quad). Such a piece has no inside, so both soup methods skip it; the flood check
+    would otherwise give its zero thickness a grid at the voxel cap (a quarter of the check's time on 40147)."""
+    v = np.asarray(piece.vertices, float)
+    v = v - v.mean(axis=0)
+    normal = np.linalg.svd(v, full_matrices=False)[2][-1]
+    return bool(np.ptp(v @ normal) > tol)
+
+
 def soup_escape_inside(
     pieces: list[trimesh.Trimesh], points: np.ndarray, rays: int = 256, min_escaping: int = 1, seed: int = 1
 ) -> np.ndarray:
@@ -257,7 +270,7 @@ def soup_escape_inside(
     bounding box can be inside it, so each point is tested against the few pieces around it."""
     points = np.asarray(points, np.float32)
     inside = np.zeros(len(points), bool)
-    for piece in pieces:
+    for piece in filter(encloses_volume, pieces):
         sel = _in_box(points, *piece.bounds)
         if len(sel):
             inside[sel] |= ray_escape_inside(raycasting_scene(piece), points[sel], rays, seed, min_escaping)
@@ -286,7 +299,7 @@ def soup_flood_fill_inside(
     voxels; points inside any piece are inside."""
     points = np.asarray(points, float)
     inside = np.zeros(len(points), bool)
-    for piece in pieces:
+    for piece in filter(encloses_volume, pieces):
         lo, hi = piece.bounds
         sel = _in_box(points, lo, hi)
         if not len(sel):
