@@ -6,8 +6,8 @@ Per object, on ``--points`` sample points of the closed state (the sampler and s
 agreement of ray escape and flood fill (both per part, soup shell applied), how many points each calls inside
 alone, and the width of the gap each disagreeing point sits in: rays cast both ways along the direction to its
 nearest surface point, hit distances added (a point between two parallel sheets 4 cm apart gets 40 mm; a ray
-that leaves the object makes the width infinite). It separates "slab interior, solid or hollow?" (a convention)
-from a sign error of either method (which would show up away from such gaps).
+that leaves the object makes the width infinite). Disagreement concentrated in narrow gaps points at slabs
+whose openings one method finds and the other does not (see docs/sdf.md); elsewhere it would be a plain error.
 """
 
 from __future__ import annotations
@@ -52,9 +52,25 @@ def object_row(folder: Path, points: int, slab_m: float) -> dict:
     def negative(inside: np.ndarray) -> np.ndarray:
         return np.where(inside, -dist, dist) - cfg.soup_shell < 0
 
-    escape = negative(soup_escape_inside(surface.pieces, pts, cfg.escape_rays, cfg.escape_min_rays))
+    escape = negative(
+        soup_escape_inside(
+            surface.pieces,
+            pts,
+            cfg.escape_rays,
+            cfg.escape_min_rays,
+            opening_spacing=cfg.escape_opening_spacing,
+            opening_offset=cfg.escape_opening_offset,
+        )
+    )
     flood = negative(
-        soup_flood_fill_inside(surface.pieces, pts, cfg.flood_cells, cfg.flood_thin_cells, cfg.flood_max_voxels)
+        soup_flood_fill_inside(
+            surface.pieces,
+            pts,
+            cfg.flood_cells,
+            cfg.flood_thin_cells,
+            cfg.flood_max_voxels,
+            frames=surface.piece_frames or None,
+        )
     )
     differ = escape != flood
     width = gap_widths(scene, pts[differ].astype(float))

@@ -11,6 +11,7 @@ from centerart.sdf.signs import (
     encloses_volume,
     flood_fill_inside,
     flood_pitch,
+    opening_targets,
     ray_escape_inside,
     ray_parity_inside,
     raycasting_scene,
@@ -133,6 +134,51 @@ def test_flat_pieces_enclose_nothing_and_change_no_sign():
     for method in (soup_escape_inside, soup_flood_fill_inside):
         assert not method([pane], pts).any()
         assert (method([pane, board], pts) == method([board], pts)).all()
+
+
+def _quad(corners) -> trimesh.Trimesh:
+    return trimesh.Trimesh(np.asarray(corners, float), [[0, 1, 2], [0, 2, 3]], process=False)
+
+
+def _slotted_door() -> tuple[trimesh.Trimesh, np.ndarray]:
+    """A door slab as PartNet-Mobility draws one (11700): back sheet, four rims and a front sheet with a
+    2 x 50 cm slot near the top, all open sheets in one piece; and points in the slab far below the slot."""
+    x0, x1, y, z0, z1 = -0.02, 0.02, 0.3, -0.4, 0.4
+    slot_lo, slot_hi, slot_y = 0.33, 0.35, 0.25
+    quads = [
+        [[x0, -y, z0], [x0, y, z0], [x0, y, z1], [x0, -y, z1]],  # back
+        [[x0, -y, z0], [x1, -y, z0], [x1, -y, z1], [x0, -y, z1]],  # rims
+        [[x0, y, z0], [x1, y, z0], [x1, y, z1], [x0, y, z1]],
+        [[x0, -y, z0], [x1, -y, z0], [x1, y, z0], [x0, y, z0]],
+        [[x0, -y, z1], [x1, -y, z1], [x1, y, z1], [x0, y, z1]],
+        [[x1, -y, z0], [x1, y, z0], [x1, y, slot_lo], [x1, -y, slot_lo]],  # front, around the slot
+        [[x1, -y, slot_hi], [x1, y, slot_hi], [x1, y, z1], [x1, -y, z1]],
+        [[x1, -y, slot_lo], [x1, -slot_y, slot_lo], [x1, -slot_y, slot_hi], [x1, -y, slot_hi]],
+        [[x1, slot_y, slot_lo], [x1, y, slot_lo], [x1, y, slot_hi], [x1, slot_y, slot_hi]],
+    ]
+    door = dedupe_soup(trimesh.util.concatenate([_quad(q) for q in quads]))
+    far = np.random.default_rng(2).uniform([-0.012, -0.28, -0.38], [0.012, 0.28, -0.1], (300, 3))
+    return door, far
+
+
+def test_aimed_rays_find_a_slot_that_spread_rays_miss():
+    """The slab behind a slot is open space by connectivity (flood fill) and by visibility (every point in it
+    sees out through the slot), but from 50-70 cm below the slot is too thin a target for 256 spread rays:
+    without the rays aimed through the openings most of those points were called solid."""
+    door, far = _slotted_door()
+    targets = opening_targets(door)
+    slot_edge = (np.abs(targets[:, 0] - 0.02) < 1e-9) & (targets[:, 2] > 0.33) & (targets[:, 2] < 0.35)
+    assert slot_edge.any()  # targets lie in the slot, 2 mm off its rim
+    spread_only = soup_escape_inside([door], far, opening_spacing=0.0)
+    assert spread_only.mean() > 0.5
+    assert not soup_escape_inside([door], far).any()
+    assert not soup_flood_fill_inside([door], far).any()
+    closed = dedupe_soup(
+        trimesh.util.concatenate(
+            [door, _quad([[0.02, -0.3, 0.33], [0.02, 0.3, 0.33], [0.02, 0.3, 0.35], [0.02, -0.3, 0.35]])]
+        )
+    )
+    assert soup_escape_inside([closed], far).all()  # with the slot covered the seams stay closed
 
 
 def test_flood_pitch_resolves_thin_boards_within_the_voxel_cap():

@@ -96,6 +96,10 @@ def _plan(cfg: GenerateSdfConfig) -> list[_Item]:
         )
     if s.flood_max_voxels < 1000 or s.escape_min_rays < 1:
         raise CenterArtError("--sampling.flood-max-voxels must be >= 1000 and --sampling.escape-min-rays >= 1")
+    if s.escape_opening_spacing < 0 or s.escape_opening_offset <= 0:
+        raise CenterArtError(
+            "--sampling.escape-opening-spacing must be >= 0 (0: no aimed rays) and --sampling.escape-opening-offset > 0"
+        )
     items = []
     for folder in list_objects(objects_dir):
         oid = folder.name

@@ -54,6 +54,10 @@ class SamplingConfig:
     """Rays of the escape test (soups' sign)."""
     escape_min_rays: int = 1
     """A soup point is outside when at least this many of the escape rays leave the piece without a hit."""
+    escape_opening_spacing: float = 0.01
+    """m between the aimed rays' targets along a soup piece's open edges (0 turns the aimed rays off)."""
+    escape_opening_offset: float = 0.002
+    """m off each open edge, in its triangle's plane, of the aimed rays' targets: narrower seams stay closed."""
     flood_cells: int = 256
     """Voxels along the longest side of each soup piece's flood-fill grid (soups' check)."""
     flood_thin_cells: int = 12
@@ -107,13 +111,21 @@ def signed_distance(
         check_inside = winding_number(mesh, points[check_idx]) > 0.5
         shell, methods = 0.0, ("ray_parity", "winding_number")
     else:
-        inside = soup_escape_inside(surface.pieces, points, cfg.escape_rays, cfg.escape_min_rays)
+        inside = soup_escape_inside(
+            surface.pieces,
+            points,
+            cfg.escape_rays,
+            cfg.escape_min_rays,
+            opening_spacing=cfg.escape_opening_spacing,
+            opening_offset=cfg.escape_opening_offset,
+        )
         check_inside = soup_flood_fill_inside(
             surface.pieces,
             points[check_idx],
             cfg.flood_cells,
             cfg.flood_thin_cells,
             cfg.flood_max_voxels,
+            frames=surface.piece_frames or None,
         )
         shell, methods = cfg.soup_shell, ("ray_escape_per_part", "flood_fill_per_part")
     sdf = np.where(inside, -dist, dist) - shell

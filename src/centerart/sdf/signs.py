@@ -14,17 +14,20 @@ single open sheet flips parity. Winding numbers need an orientation the soups la
 give 0 everywhere). Both soup methods work part by part (one piece per named part of a link, see the comment
 above :func:`soup_escape_inside`): a point is inside the object when it is inside one of its parts.
 
-- sign: :func:`ray_escape_inside`, a point is outside a piece when at least one of many evenly spread rays leaves
-  it without a hit, i.e. when it can be seen from outside: the visibility convention of DeepSDF-style data
-  (depth scans from a sphere of cameras) on exact geometry, so closed boards thinner than any voxel stay solid.
-  The SDF gives every sheet a thin shell (see :mod:`centerart.sdf.sampling`), so open sheets have an inside too.
+- sign: :func:`ray_escape_inside`, a point is outside a piece when at least one ray leaves it without a hit,
+  i.e. when it can be seen from outside: 256 evenly spread rays, then one ray aimed through each opening of the
+  piece (:func:`opening_targets`, points just beyond its open edges), which finds an opening however small it
+  looks from the point. The visibility convention of DeepSDF-style data (depth scans from a sphere of cameras)
+  on exact geometry, so closed boards thinner than any voxel stay solid. The SDF gives every sheet a thin shell
+  (see :mod:`centerart.sdf.sampling`), so open sheets have an inside too.
 - check: :func:`flood_fill_inside`, empty space the flood from the grid border cannot reach is inside, on a grid
-  per piece fine enough to give its thinnest side an interior (:func:`flood_pitch`); points in wall voxels take
+  per piece fine enough to give its thinnest side an interior (:func:`flood_pitch`) and laid out where the piece
+  is when the object is closed (so a door's grid does not change as it opens); points in wall voxels take
   the label of the first empty voxel found by walking away from their nearest surface point. Voxels and
-  connectivity, no rays. The two disagree where a piece is ambiguous: a slab of two sheets whose openings (a
-  slot for a handle, missing triangles, open board ends) are wider than the flood's one-voxel closing but seen
-  by few straight rays (flood: outside, escape: inside, as the real door or board), sheltered pockets reached
-  by a bent path only. ``benchmarks/sdf_sign_disagreement.py`` measures where; docs/sdf.md has the figures.
+  connectivity, no rays. The two differ on pockets reached only by a bent path (flood: outside), and on
+  openings between the aimed rays' offset (2 mm) and the flood's closing (one voxel). Before the aimed rays
+  they also differed on slabs behind small openings (a slot for a handle, the open end of a board), which
+  spread rays rarely found; ``benchmarks/sdf_sign_disagreement.py`` measures where, docs/sdf.md has the figures.
 
 Flat pieces (:func:`encloses_volume`) have no inside and are skipped by both.
 """
@@ -88,13 +91,20 @@ def ray_escape_inside(
     rays: int = 256,
     seed: int = 1,
     min_escaping: int = 1,
+    targets: np.ndarray | None = None,
     chunk: int = 20_000,
+    chunk_rays: int = 4_000_000,
 ) -> np.ndarray:
-    """Inside (bool per point) unless at least ``min_escaping`` of ``rays`` evenly spread rays leave without a hit.
+    """Inside (bool per point) unless at least ``min_escaping`` rays leave without a hit: ``rays`` evenly spread
+    directions, then, for points still undecided, one ray aimed at each of ``targets`` (points in the openings
+    of the surface, see :func:`opening_targets`).
 
     ``min_escaping`` > 1 makes a crack that only a ray or two find count as closed. Most outside points escape
     along several of the first few directions, so every point first tries a spread subset of 32 rays and only
-    the points still undecided try the rest."""
+    the points still undecided try the rest. Why aimed rays: evenly spread rays miss an opening that looks small
+    from the point (a 2 cm slot seen from 40 cm, the open end of a 2 cm board seen from its middle); whether
+    such a point was called inside then depended on the ray seed and count (1.6-2.3% of the points of three
+    real objects flipped with the seed). A ray through each opening finds it whatever its size."""
     dirs = ray_directions(rays, seed).astype(np.float32)
     stride = max(1, rays // 32)
     first, rest = dirs[::stride], np.delete(dirs, np.arange(0, rays, stride), axis=0)
@@ -107,7 +117,42 @@ def ray_escape_inside(
         if len(rest) and len(todo):
             escaping[todo] += (~scene.test_occlusions(_ray_tensor(p[todo], rest)).numpy()).sum(axis=1)
         inside[s : s + chunk] = escaping < min_escaping
+    if targets is not None and len(targets):
+        todo = np.flatnonzero(inside)
+        targets = np.asarray(targets, np.float32)
+        step = max(1, chunk_rays // len(targets))
+        for s in range(0, len(todo), step):
+            which = todo[s : s + step]
+            p = points[which]
+            aim = targets[None] - p[:, None]
+            aim /= np.maximum(np.linalg.norm(aim, axis=2, keepdims=True), 1e-9)
+            rays_aimed = np.concatenate([np.broadcast_to(p[:, None], aim.shape), aim], axis=2)
+            escaping = (~scene.test_occlusions(o3d.core.Tensor(rays_aimed)).numpy()).sum(axis=1)
+            inside[which] = escaping < min_escaping
     return inside
+
+
+def opening_targets(mesh: trimesh.Trimesh, spacing: float = 0.01, offset: float = 0.002) -> np.ndarray:
+    """(M, 3) points in the openings of a triangle soup: along every open edge (an edge of one triangle only),
+    ``spacing`` m apart, moved ``offset`` m off the edge in its triangle's plane, away from the triangle.
+
+    An opening narrower than ``offset`` (a seam between two sheets that meet without sharing vertices) puts the
+    point on or behind the neighbouring sheet, so a ray through it does not escape: such seams stay closed, as
+    in the flood fill's one-voxel closing. Closed meshes have no open edges and no targets."""
+    open_edges = trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1)
+    if not len(open_edges):
+        return np.zeros((0, 3))
+    v = np.asarray(mesh.vertices, float)
+    face = mesh.edges_face[open_edges]
+    a, b = v[mesh.edges[open_edges, 0]], v[mesh.edges[open_edges, 1]]
+    third = v[mesh.faces[face]].sum(axis=1) - a - b
+    away = np.cross(mesh.face_normals[face], b - a)
+    away /= np.maximum(np.linalg.norm(away, axis=1, keepdims=True), 1e-12)
+    away *= np.where(np.einsum("ij,ij->i", third - a, away) > 0, -1.0, 1.0)[:, None]
+    per_edge = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / spacing)).astype(int)
+    edge = np.repeat(np.arange(len(open_edges)), per_edge)
+    t = (np.arange(len(edge)) - np.repeat(np.cumsum(per_edge) - per_edge, per_edge) + 0.5) / per_edge[edge]
+    return a[edge] + t[:, None] * (b - a)[edge] + offset * away[edge]
 
 
 def winding_number(mesh: trimesh.Trimesh, points: np.ndarray, block: int = 200_000) -> np.ndarray:
@@ -264,16 +309,27 @@ def encloses_volume(piece: trimesh.Trimesh, tol: float = 1e-4) -> bool:
 
 
 def soup_escape_inside(
-    pieces: list[trimesh.Trimesh], points: np.ndarray, rays: int = 256, min_escaping: int = 1, seed: int = 1
+    pieces: list[trimesh.Trimesh],
+    points: np.ndarray,
+    rays: int = 256,
+    min_escaping: int = 1,
+    seed: int = 1,
+    opening_spacing: float = 0.01,
+    opening_offset: float = 0.002,
 ) -> np.ndarray:
-    """:func:`ray_escape_inside` per piece, points inside any piece are inside. Only points within a piece's
-    bounding box can be inside it, so each point is tested against the few pieces around it."""
+    """:func:`ray_escape_inside` per piece, with rays aimed through the piece's openings
+    (:func:`opening_targets`; ``opening_spacing`` <= 0 turns them off); points inside any piece are inside. Only
+    points within a piece's bounding box can be inside it, so each point is tested against the few pieces around
+    it."""
     points = np.asarray(points, np.float32)
     inside = np.zeros(len(points), bool)
     for piece in filter(encloses_volume, pieces):
         sel = _in_box(points, *piece.bounds)
         if len(sel):
-            inside[sel] |= ray_escape_inside(raycasting_scene(piece), points[sel], rays, seed, min_escaping)
+            targets = opening_targets(piece, opening_spacing, opening_offset) if opening_spacing > 0 else None
+            inside[sel] |= ray_escape_inside(
+                raycasting_scene(piece), points[sel], rays, seed, min_escaping, targets=targets
+            )
     return inside
 
 
@@ -294,19 +350,26 @@ def soup_flood_fill_inside(
     max_voxels: float = 4e6,
     grow: int = 1,
     seed: int = 0,
+    frames: list[np.ndarray] | None = None,
 ) -> np.ndarray:
     """:func:`flood_fill_inside` per piece on a grid sized by :func:`flood_pitch`, walls closed by ``grow``
-    voxels; points inside any piece are inside."""
+    voxels; points inside any piece are inside. ``frames`` (4x4 per piece, optional) move each piece and the
+    points into the frame its grid is aligned with (see :attr:`ObjectSurface.piece_frames`)."""
     points = np.asarray(points, float)
     inside = np.zeros(len(points), bool)
-    for piece in filter(encloses_volume, pieces):
-        lo, hi = piece.bounds
-        sel = _in_box(points, lo, hi)
+    for k, piece in enumerate(pieces):
+        if not encloses_volume(piece):
+            continue
+        sel = _in_box(points, *piece.bounds)
         if not len(sel):
             continue
+        p = points[sel]
+        if frames is not None and not np.allclose(frames[k], np.eye(4)):
+            piece = piece.copy()
+            piece.apply_transform(frames[k])
+            p = p @ frames[k][:3, :3].T + frames[k][:3, 3]
+        lo, hi = piece.bounds
         pitch = flood_pitch(hi - lo, cells, thin_cells, max_voxels)
         pad = (grow + 3) * pitch
-        inside[sel] |= flood_fill_inside(
-            piece, raycasting_scene(piece), points[sel], lo - pad, hi + pad, pitch, grow, seed
-        )
+        inside[sel] |= flood_fill_inside(piece, raycasting_scene(piece), p, lo - pad, hi + pad, pitch, grow, seed)
     return inside

@@ -31,6 +31,11 @@ class ObjectSurface:
     """True when ``mesh`` is the exact union of closed parts (generated objects), False for a soup."""
     pieces: list[trimesh.Trimesh] = field(default_factory=list)
     """Soups only: the deduplicated mesh of each named part of each link (PartNet-Mobility ``<visual name>``)."""
+    piece_frames: list[np.ndarray] = field(default_factory=list)
+    """Soups only, one 4x4 per piece: canonical frame at this state -> canonical frame at the closed state
+    (``closed_T_link @ inv(state_T_link)`` of the piece's link). The flood-fill check voxelises each piece in
+    that frame, so a door's grid moves with the door: at 45 degrees an axis-aligned grid of the door grew, its
+    pitch coarsened from 3.3 to 4.2 mm and its 5 mm glass pane lost its interior (11700: 0.999 -> 0.986)."""
 
 
 def object_surface(obj: ArticulatedObject, q: float) -> ObjectSurface:
@@ -45,9 +50,14 @@ def object_surface(obj: ArticulatedObject, q: float) -> ObjectSurface:
     groups: dict[tuple[str, str], list[trimesh.Trimesh]] = defaultdict(list)
     for p in parts:
         groups[(p.link, p.name)].append(p.mesh)
-    pieces = [dedupe_soup(trimesh.util.concatenate(g)) for g in groups.values()]
-    pieces = [m for m in pieces if len(m.faces)]
-    return ObjectSurface(dedupe_soup(trimesh.util.concatenate(meshes)), False, pieces)
+    at_q, closed = obj.link_poses(q), obj.link_poses(obj.denormalize(0.0))
+    pieces, frames = [], []
+    for (link, _), group in groups.items():
+        piece = dedupe_soup(trimesh.util.concatenate(group))
+        if len(piece.faces):
+            pieces.append(piece)
+            frames.append(closed[link] @ np.linalg.inv(at_q[link]))
+    return ObjectSurface(dedupe_soup(trimesh.util.concatenate(meshes)), False, pieces, frames)
 
 
 def dedupe_soup(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
