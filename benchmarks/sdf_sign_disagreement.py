@@ -21,8 +21,8 @@ import open3d as o3d
 
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.dataset import list_objects
-from centerart.sdf.sampling import SamplingConfig, sample_points
-from centerart.sdf.signs import raycasting_scene, soup_escape_inside, soup_flood_fill_inside
+from centerart.sdf.sampling import SamplingConfig, sample_points, soup_check_inside, soup_sign_inside
+from centerart.sdf.signs import raycasting_scene
 from centerart.sdf.surface import object_surface
 from centerart.utils.seeding import item_rng
 
@@ -52,26 +52,8 @@ def object_row(folder: Path, points: int, slab_m: float) -> dict:
     def negative(inside: np.ndarray) -> np.ndarray:
         return np.where(inside, -dist, dist) - cfg.soup_shell < 0
 
-    escape = negative(
-        soup_escape_inside(
-            surface.pieces,
-            pts,
-            cfg.escape_rays,
-            cfg.escape_min_rays,
-            opening_spacing=cfg.escape_opening_spacing,
-            opening_offset=cfg.escape_opening_offset,
-        )
-    )
-    flood = negative(
-        soup_flood_fill_inside(
-            surface.pieces,
-            pts,
-            cfg.flood_cells,
-            cfg.flood_thin_cells,
-            cfg.flood_max_voxels,
-            frames=surface.piece_frames or None,
-        )
-    )
+    escape = negative(soup_sign_inside(surface, pts, cfg))
+    flood = negative(soup_check_inside(surface, pts, cfg))
     differ = escape != flood
     width = gap_widths(scene, pts[differ].astype(float))
     finite = width[np.isfinite(width)]

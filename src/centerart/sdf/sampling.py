@@ -111,25 +111,35 @@ def signed_distance(
         check_inside = winding_number(mesh, points[check_idx]) > 0.5
         shell, methods = 0.0, ("ray_parity", "winding_number")
     else:
-        inside = soup_escape_inside(
-            surface.pieces,
-            points,
-            cfg.escape_rays,
-            cfg.escape_min_rays,
-            opening_spacing=cfg.escape_opening_spacing,
-            opening_offset=cfg.escape_opening_offset,
-        )
-        check_inside = soup_flood_fill_inside(
-            surface.pieces,
-            points[check_idx],
-            cfg.flood_cells,
-            cfg.flood_thin_cells,
-            cfg.flood_max_voxels,
-            frames=surface.piece_frames or None,
-        )
+        inside = soup_sign_inside(surface, points, cfg)
+        check_inside = soup_check_inside(surface, points[check_idx], cfg)
         shell, methods = cfg.soup_shell, ("ray_escape_per_part", "flood_fill_per_part")
     sdf = np.where(inside, -dist, dist) - shell
     # Agreement on the sign of the final field: within the shell both methods give a negative value.
     check_sdf = np.where(check_inside, -dist[check_idx], dist[check_idx]) - shell
     agreement = float(np.mean((sdf[check_idx] < 0) == (check_sdf < 0)))
     return SignedSamples(points, sdf.astype(np.float32), agreement, len(check_idx), *methods)
+
+
+def soup_sign_inside(surface: ObjectSurface, points: np.ndarray, cfg: SamplingConfig) -> np.ndarray:
+    """The soup sign (ray escape per part, aimed rays included) with the settings of ``cfg``."""
+    return soup_escape_inside(
+        surface.pieces,
+        points,
+        cfg.escape_rays,
+        cfg.escape_min_rays,
+        opening_spacing=cfg.escape_opening_spacing,
+        opening_offset=cfg.escape_opening_offset,
+    )
+
+
+def soup_check_inside(surface: ObjectSurface, points: np.ndarray, cfg: SamplingConfig) -> np.ndarray:
+    """The soup check (flood fill per part, grids moving with the parts) with the settings of ``cfg``."""
+    return soup_flood_fill_inside(
+        surface.pieces,
+        points,
+        cfg.flood_cells,
+        cfg.flood_thin_cells,
+        cfg.flood_max_voxels,
+        frames=surface.piece_frames or None,
+    )

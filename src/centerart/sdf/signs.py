@@ -323,14 +323,22 @@ def soup_escape_inside(
     it."""
     points = np.asarray(points, np.float32)
     inside = np.zeros(len(points), bool)
-    for piece in filter(encloses_volume, pieces):
-        sel = _in_box(points, *piece.bounds)
-        if len(sel):
-            targets = opening_targets(piece, opening_spacing, opening_offset) if opening_spacing > 0 else None
-            inside[sel] |= ray_escape_inside(
-                raycasting_scene(piece), points[sel], rays, seed, min_escaping, targets=targets
-            )
+    for _, piece, sel in _pieces_and_nearby_points(pieces, points):
+        targets = opening_targets(piece, opening_spacing, opening_offset) if opening_spacing > 0 else None
+        inside[sel] |= ray_escape_inside(
+            raycasting_scene(piece), points[sel], rays, seed, min_escaping, targets=targets
+        )
     return inside
+
+
+def _pieces_and_nearby_points(pieces: list[trimesh.Trimesh], points: np.ndarray):
+    """(index, piece, indices of the points in its bounding box) for every piece that encloses a volume and has
+    points around it."""
+    for k, piece in enumerate(pieces):
+        if encloses_volume(piece):
+            sel = _in_box(points, *piece.bounds)
+            if len(sel):
+                yield k, piece, sel
 
 
 def flood_pitch(extents: np.ndarray, cells: int, thin_cells: int, max_voxels: float) -> float:
@@ -357,12 +365,7 @@ def soup_flood_fill_inside(
     points into the frame its grid is aligned with (see :attr:`ObjectSurface.piece_frames`)."""
     points = np.asarray(points, float)
     inside = np.zeros(len(points), bool)
-    for k, piece in enumerate(pieces):
-        if not encloses_volume(piece):
-            continue
-        sel = _in_box(points, *piece.bounds)
-        if not len(sel):
-            continue
+    for k, piece, sel in _pieces_and_nearby_points(pieces, points):
         p = points[sel]
         if frames is not None and not np.allclose(frames[k], np.eye(4)):
             piece = piece.copy()
