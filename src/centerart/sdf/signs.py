@@ -41,6 +41,8 @@ import open3d as o3d
 import trimesh
 from scipy import ndimage
 
+from centerart.geometry.transforms import apply_transform
+
 
 def raycasting_scene(mesh: trimesh.Trimesh) -> o3d.t.geometry.RaycastingScene:
     scene = o3d.t.geometry.RaycastingScene()
@@ -370,7 +372,7 @@ def soup_flood_fill_inside(
         if frames is not None and not np.allclose(frames[k], np.eye(4)):
             piece = piece.copy()
             piece.apply_transform(frames[k])
-            p = p @ frames[k][:3, :3].T + frames[k][:3, 3]
+            p = apply_transform(frames[k], p)
         lo, hi = piece.bounds
         pitch = flood_pitch(hi - lo, cells, thin_cells, max_voxels)
         pad = (grow + 3) * pitch

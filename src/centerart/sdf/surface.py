@@ -19,6 +19,7 @@ import trimesh
 
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.mesh_ops import union
+from centerart.geometry.transforms import invert_pose
 
 
 @dataclass
@@ -56,7 +57,7 @@ def object_surface(obj: ArticulatedObject, q: float) -> ObjectSurface:
         piece = dedupe_soup(trimesh.util.concatenate(group))
         if len(piece.faces):
             pieces.append(piece)
-            frames.append(closed[link] @ np.linalg.inv(at_q[link]))
+            frames.append(closed[link] @ invert_pose(at_q[link]))
     return ObjectSurface(dedupe_soup(trimesh.util.concatenate(meshes)), False, pieces, frames)
 
 
