@@ -78,6 +78,11 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "centerart.commands:train_decoder",
             "auto-decoder training of the SGDF decoder",
         ),
+        "encoder": Command(
+            "centerart.training.train_encoder:TrainEncoderConfig",
+            "centerart.commands:train_encoder",
+            "RGB-D encoder training on rendered scenes (targets: the decoder's shape codes)",
+        ),
     },
     "decoder": {
         "show": Command(

@@ -95,6 +95,15 @@ def train_decoder(cfg) -> None:
     print(f"wrote {result['checkpoint']}")
 
 
+def train_encoder(cfg) -> None:
+    from centerart.training.train_encoder import train_encoder as train
+
+    result = train(cfg)
+    shown = {k: round(v, 4) for k, v in result["metrics"].items() if k.startswith("val/") and v is not None}
+    print(f"metrics: {shown}")
+    print(f"wrote {result['checkpoint']}")
+
+
 def decoder_show(cfg) -> None:
     from centerart.inference.decoder_show import show_decoder
 

@@ -1,0 +1,87 @@
+"""Encoder configuration and its named presets (``tiny`` for tests, ``small`` for a 2-core CPU, ``paper``)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields, replace
+from typing import Literal
+
+
+@dataclass(frozen=True)
+class EncoderConfig:
+    """Layout of the RGB-D encoder (:class:`~centerart.models.encoder.network.RGBDEncoder`).
+
+    Images are letterboxed to ``input_width`` x ``input_height`` (scaled to fit, intrinsics scaled with them,
+    zero padding right and bottom). Heatmap at input resolution; every other head at stride ``head_stride``.
+    """
+
+    input_width: int = 320
+    input_height: int = 240
+    stem_rgb: int = 16
+    """Channels of the RGB branch of the stem (stride 4)."""
+    stem_depth: int = 16
+    """Channels of the depth branch of the stem (stride 4, with a dilated residual block)."""
+    block: Literal["basic", "bottleneck"] = "basic"
+    depths: tuple[int, ...] = (2, 2, 2, 2)
+    """Residual blocks per stage (strides 4, 8, 16, 32)."""
+    widths: tuple[int, ...] = (32, 48, 64, 96)
+    """Output channels per stage."""
+    bottleneck_ratio: int = 2
+    """Bottleneck blocks: inner width = width / ratio."""
+    norm: Literal["bn", "gn"] = "gn"
+    """bn: batch norm (the published choice, needs large batches); gn: group norm (small batches on a CPU)."""
+    fpn_channels: int = 64
+    head_channels: int = 64
+    head_stride: int = 8
+    code_dim: int = 32
+    """Shape-code length: must equal the decoder checkpoint's."""
+    rgb_mean: float = 0.5
+    rgb_std: float = 0.2
+    max_depth_m: float = 6.0
+    """Depth beyond this (m) is treated as a hole."""
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict) -> EncoderConfig:
+        known = {f.name for f in fields(cls)}
+        unknown = set(data) - known
+        if unknown:
+            raise ValueError(f"unknown encoder config fields {sorted(unknown)}")
+        data = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
+        return cls(**data)
+
+
+PRESETS: dict[str, EncoderConfig] = {
+    "tiny": EncoderConfig(
+        input_width=160,
+        input_height=120,
+        stem_rgb=8,
+        stem_depth=8,
+        depths=(1, 1, 1, 1),
+        widths=(16, 24, 32, 48),
+        fpn_channels=32,
+        head_channels=32,
+    ),
+    "small": EncoderConfig(),
+    # The published layout: ResNet-50 stages [3, 4, 6, 3] at a quarter of the width, FPN 64, heads 32, 960x512.
+    "paper": EncoderConfig(
+        input_width=960,
+        input_height=512,
+        stem_rgb=32,
+        stem_depth=32,
+        block="bottleneck",
+        depths=(3, 4, 6, 3),
+        widths=(64, 128, 256, 512),
+        bottleneck_ratio=2,
+        norm="bn",
+        fpn_channels=64,
+        head_channels=32,
+    ),
+}
+
+
+def preset(name: str, **overrides) -> EncoderConfig:
+    if name not in PRESETS:
+        raise ValueError(f"unknown encoder preset {name!r}; choose from {sorted(PRESETS)}")
+    return replace(PRESETS[name], **overrides)

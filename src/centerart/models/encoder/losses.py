@@ -1,0 +1,103 @@
+"""Encoder losses: the published terms (heatmap MSE, keypoint pose loss, shape-code L1, joint code) plus the
+joint heads, every per-object term masked to the cells that see an object (the published joint loss was not).
+
+Targets come as a batch dict (see :mod:`centerart.training.encoder_targets`): ``heatmap`` (B, H, W); per cell
+``cell_object`` (B, h, w) long, the index of the object the cell belongs to (-1: background) and ``cell_weight``
+(B, h, w), the target heatmap at the cell centre; per object (B, M, ...) ``rotation`` (3, 3), ``translation``
+(3, m), ``shape_code``, ``shape_code_valid``, ``joint_code``, ``joint_type`` (0 revolute, 1 prismatic),
+``axis_direction``, ``axis_point_offset`` (m), ``joint_state`` (rad or m); and ``K`` (B, 3, 3) of the input.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import torch
+import torch.nn.functional as F
+
+from centerart.models.encoder.network import EncoderOutput, cell_centers, object_translation, rotation_from_raw
+
+KEYPOINT_ARM_M = 0.1  # the published pose loss: t and t + 0.1 m along each rotated axis
+
+
+@dataclass(frozen=True)
+class EncoderLossConfig:
+    heatmap: float = 100.0
+    pose: float = 5.0
+    shape: float = 1.0
+    joint_code: float = 10.0
+    joint_type: float = 1.0
+    axis_direction: float = 1.0
+    axis_point: float = 5.0
+    joint_state: float = 1.0
+    min_cell_weight: float = 0.25
+    """Cells whose target heatmap is at most this carry no object (the published 0.25)."""
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def gather_object_cells(out: EncoderOutput, batch: dict, min_weight: float) -> dict | None:
+    """Predictions and targets at every object cell, flattened to (N, ...); None when no cell has an object."""
+    obj, weight = batch["cell_object"], batch["cell_weight"]
+    sel = (obj >= 0) & (weight > min_weight)
+    if not bool(sel.any()):
+        return None
+    b, i, j = torch.nonzero(sel, as_tuple=True)
+    k = obj[b, i, j]
+    pred = {name: f[b, :, i, j] for name, f in out.dense.items()}
+    h, w = obj.shape[-2:]
+    cells = cell_centers(h, w, out.stride, device=obj.device)[i, j]
+    target = {name: batch[name][b, k] for name in OBJECT_FIELDS}
+    return {"pred": pred, "target": target, "weight": weight[b, i, j], "cells": cells, "K": batch["K"][b]}
+
+
+OBJECT_FIELDS = (
+    "rotation",
+    "translation",
+    "shape_code",
+    "shape_code_valid",
+    "joint_code",
+    "joint_type",
+    "axis_direction",
+    "axis_point_offset",
+    "joint_state",
+)
+
+
+def keypoints(rotation: torch.Tensor, translation: torch.Tensor) -> torch.Tensor:
+    """(N, 4, 3): the origin and the tips of the three 0.1 m axes of each object frame."""
+    tips = translation[:, None, :] + KEYPOINT_ARM_M * rotation.transpose(1, 2)
+    return torch.cat([translation[:, None, :], tips], dim=1)
+
+
+def encoder_loss(out: EncoderOutput, batch: dict, cfg: EncoderLossConfig) -> tuple[torch.Tensor, dict]:
+    """Weighted total loss and its terms (unweighted, detached) for logging."""
+    terms = {"heatmap": F.mse_loss(out.heatmap, batch["heatmap"])}
+    cells = gather_object_cells(out, batch, cfg.min_cell_weight)
+    if cells is not None:
+        terms.update(object_terms(cells))
+    total = sum(getattr(cfg, name) * value for name, value in terms.items())
+    return total, {name: value.detach() for name, value in terms.items()}
+
+
+def _weighted_mean(values: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
+    return (values * weight).sum() / weight.sum().clamp_min(1e-6)
+
+
+def object_terms(cells: dict) -> dict[str, torch.Tensor]:
+    p, t, w = cells["pred"], cells["target"], cells["weight"]
+    rot = rotation_from_raw(p["rotation"])
+    trans = object_translation(cells["cells"], p["center_offset"], p["center_depth"][:, 0], cells["K"])
+    kp_err = (keypoints(rot, trans) - keypoints(t["rotation"], t["translation"])).norm(dim=-1).mean(dim=1)
+    code_w = w * t["shape_code_valid"].float()
+    terms = {
+        "pose": _weighted_mean(kp_err, w),
+        "shape": _weighted_mean((p["shape_code"] - t["shape_code"]).abs().sum(dim=1), code_w),
+        "joint_code": _weighted_mean((p["joint_code"][:, 0] - t["joint_code"]) ** 2, w),
+        "joint_type": _weighted_mean(F.cross_entropy(p["joint_type_logits"], t["joint_type"], reduction="none"), w),
+        "axis_direction": _weighted_mean(1.0 - (p["axis_direction"] * t["axis_direction"]).sum(dim=1), w),
+        "axis_point": _weighted_mean((p["axis_point_offset"] - t["axis_point_offset"]).abs().sum(dim=1), w),
+        "joint_state": _weighted_mean((p["joint_state"][:, 0] - t["joint_state"]).abs(), w),
+    }
+    return terms

@@ -1,0 +1,95 @@
+"""Encoder metrics on one labelled view: detection precision / recall and per-object pose and joint errors.
+
+Thresholds (constants, printed in every report that uses them): a prediction matches a labelled object when their
+3-D centres (object origins, camera frame) are closer than ``MATCH_DISTANCE_M`` (Hungarian assignment); recall
+counts labelled objects at least ``MIN_VISIBLE_FRACTION`` visible; a prediction matched to a less visible object
+is neither a true nor a false positive.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from centerart.geometry.matching import match_points
+from centerart.geometry.transforms import rotation_angle_between
+from centerart.models.encoder.readout import Detection
+
+MATCH_DISTANCE_M = 0.10
+MIN_VISIBLE_FRACTION = 0.3
+
+
+def view_metrics(detections: list[Detection], labels: dict, codes: dict | None = None) -> dict:
+    """Counts and a list of per-object error rows (matched labelled objects) for one view."""
+    objects = labels["objects"]
+    true_t = np.array([np.asarray(o["camera_T_object"])[:3, 3] for o in objects]).reshape(-1, 3)
+    pred_t = np.array([d.camera_T_object[:3, 3] for d in detections]).reshape(-1, 3)
+    pairs = match_points(pred_t, true_t, MATCH_DISTANCE_M)
+    visible = [o["visible_fraction"] >= MIN_VISIBLE_FRACTION for o in objects]
+    matched_true = {j for _, j in pairs}
+    counts = {
+        "true_objects": int(sum(visible)),
+        "found": int(sum(1 for j in matched_true if visible[j])),
+        "predictions": len(detections) - sum(1 for _, j in pairs if not visible[j]),
+        "true_positives": int(sum(1 for _, j in pairs if visible[j])),
+    }
+    rows = [object_errors(detections[i], objects[j], codes) for i, j in pairs]
+    return {"counts": counts, "rows": rows}
+
+
+def object_errors(det: Detection, obj: dict, codes: dict | None = None) -> dict:
+    pose = np.asarray(obj["camera_T_object"], float)
+    joint = obj["joint"]
+    axis = np.asarray(joint["axis_direction_camera"], float)
+    axis /= np.linalg.norm(axis)
+    scale = 180.0 / np.pi if joint["type"] == "revolute" else 100.0  # deg or cm
+    row = {
+        "object_id": obj["object_id"],
+        "category": obj["category"],
+        "visible_fraction": obj["visible_fraction"],
+        "joint_type": joint["type"],
+        "translation_cm": 100.0 * float(np.linalg.norm(det.camera_T_object[:3, 3] - pose[:3, 3])),
+        "rotation_deg": float(np.degrees(rotation_angle_between(det.camera_T_object[:3, :3], pose[:3, :3]))),
+        "joint_type_correct": det.joint_type == joint["type"],
+        "axis_deg": float(np.degrees(np.arccos(np.clip(np.dot(det.axis_direction, axis), -1.0, 1.0)))),
+        "joint_state_error": abs(det.joint_state - joint["state"]) * scale,
+        "joint_code_error": abs(det.joint_code - joint["state_normalized"]),
+    }
+    if codes is not None and obj["object_id"] in codes:
+        row["shape_code_l1"] = float(np.abs(det.shape_code - codes[obj["object_id"]]).mean())
+    return row
+
+
+def summarize(results: list[dict]) -> dict:
+    """Precision, recall and median errors over many views' :func:`view_metrics` results."""
+    tp = sum(r["counts"]["true_positives"] for r in results)
+    preds = sum(r["counts"]["predictions"] for r in results)
+    true = sum(r["counts"]["true_objects"] for r in results)
+    found = sum(r["counts"]["found"] for r in results)
+    rows = [row for r in results for row in r["rows"]]
+    out = {
+        "views": len(results),
+        "true_objects": true,
+        "precision": tp / preds if preds else 0.0,
+        "recall": found / true if true else 0.0,
+        "matched": len(rows),
+    }
+    if rows:
+        out.update(summarize_rows(rows))
+    return out
+
+
+def summarize_rows(rows: list[dict]) -> dict:
+    med = lambda key, sel=rows: float(np.median([r[key] for r in sel])) if sel else float("nan")  # noqa: E731
+    rev = [r for r in rows if r["joint_type"] == "revolute"]
+    pri = [r for r in rows if r["joint_type"] == "prismatic"]
+    out = {
+        "translation_cm_median": med("translation_cm"),
+        "rotation_deg_median": med("rotation_deg"),
+        "joint_type_accuracy": float(np.mean([r["joint_type_correct"] for r in rows])),
+        "axis_deg_median": med("axis_deg"),
+        "joint_state_deg_median": med("joint_state_error", rev),
+        "joint_state_cm_median": med("joint_state_error", pri),
+    }
+    if any("shape_code_l1" in r for r in rows):
+        out["shape_code_l1_mean"] = float(np.mean([r["shape_code_l1"] for r in rows if "shape_code_l1" in r]))
+    return out

@@ -1,0 +1,78 @@
+"""Lightning module for the RGB-D encoder: one shared interface (forward -> loss and a dict of terms).
+
+Validation logs the loss terms and, from the read-out objects (heatmap peaks), detection precision / recall and
+median pose and joint errors (:mod:`centerart.training.encoder_metrics`), under ``val/``.
+"""
+
+from __future__ import annotations
+
+import lightning as L
+import torch
+
+from centerart.models.encoder.config import EncoderConfig
+from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
+from centerart.models.encoder.network import RGBDEncoder
+from centerart.models.encoder.readout import read_objects
+from centerart.training.encoder_metrics import summarize, view_metrics
+
+WARMUP_START = 0.2  # the published schedule: one epoch of linear warm-up from 0.2 x lr, then poly(0.9) decay
+POLY_POWER = 0.9
+
+
+class EncoderModule(L.LightningModule):
+    def __init__(self, config: EncoderConfig, loss: EncoderLossConfig, lr: float, epochs: int, codes=None):
+        super().__init__()
+        self.encoder = RGBDEncoder(config)
+        self.loss_config = loss
+        self.lr, self.epochs = lr, epochs
+        self.codes = codes
+        self._val_results: list[dict] = []
+        self.save_hyperparameters({"encoder": config.to_dict(), "loss": loss.to_dict(), "lr": lr, "epochs": epochs})
+
+    def forward(self, batch: dict):
+        out = self.encoder(batch["rgb"], batch["depth"])
+        loss, terms = encoder_loss(out, batch, self.loss_config)
+        return loss, terms, out
+
+    def training_step(self, batch, batch_idx):
+        loss, terms, _ = self(batch)
+        bs = batch["rgb"].shape[0]
+        self.log("train/loss", loss, prog_bar=True, batch_size=bs)
+        self.log_dict({f"train/{k}": v for k, v in terms.items()}, batch_size=bs)
+        return loss
+
+    def on_train_epoch_start(self):
+        loader = self.trainer.train_dataloader
+        dataset = getattr(loader, "dataset", None)
+        if hasattr(dataset, "set_epoch"):
+            dataset.set_epoch(self.current_epoch)
+
+    def validation_step(self, batch, batch_idx):
+        loss, terms, out = self(batch)
+        bs = batch["rgb"].shape[0]
+        self.log("val/loss", loss, batch_size=bs)
+        self.log_dict({f"val/{k}": v for k, v in terms.items()}, batch_size=bs)
+        for b, meta in enumerate(batch["meta"]):
+            detections = read_objects(out, batch["K"][b].cpu().numpy(), index=b)
+            labels = self.trainer.val_dataloaders.dataset.labels_of(meta["view"])
+            self._val_results.append(view_metrics(detections, labels, self.codes))
+
+    def on_validation_epoch_end(self):
+        if self._val_results:
+            summary = summarize(self._val_results)
+            logged = {f"val/{k}": float(v) for k, v in summary.items() if isinstance(v, (int, float))}
+            self.log_dict(logged)
+        self._val_results = []
+
+    def configure_optimizers(self):
+        opt = torch.optim.Adam(self.encoder.parameters(), lr=self.lr)
+        steps_per_epoch = max(1, self.trainer.estimated_stepping_batches // max(self.epochs, 1))
+        total = max(1, self.trainer.estimated_stepping_batches)
+
+        def factor(step: int) -> float:
+            if step < steps_per_epoch:
+                return WARMUP_START + (1 - WARMUP_START) * step / steps_per_epoch
+            return max(1e-3, (1 - step / total) ** POLY_POWER)
+
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, factor)
+        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "step"}}

@@ -1,0 +1,152 @@
+"""``centerart train encoder``: train the RGB-D encoder on rendered scenes against a decoder's shape codes.
+
+Writes to ``--out``::
+
+    OUT/encoder.pt            the exported checkpoint (models/encoder/checkpoint.py: weights, config, decoder link)
+    OUT/config.json           this command's config with the resolved encoder config
+    OUT/metrics.json          final validation metrics (held-out scenes), training time and images/s
+    OUT/logs/csv/...          per-step / epoch metrics (CSV) and OUT/logs/tensorboard/... (TensorBoard)
+    OUT/lightning/last.ckpt   Lightning checkpoint (rerunning the same command resumes from it)
+
+Training runs on CPU, one GPU, or several devices / nodes with DDP (``--devices``, ``--num-nodes``,
+``--strategy``), the same code.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Literal
+
+import torch
+
+from centerart.errors import CenterArtError
+from centerart.models.encoder.config import PRESETS, EncoderConfig
+from centerart.models.encoder.losses import EncoderLossConfig
+from centerart.training.encoder_augment import AugmentConfig
+from centerart.utils.atomic import atomic_write_json
+
+
+@dataclass
+class TrainEncoderConfig:
+    scenes: tuple[Path, ...]
+    """Training scene folders (``centerart scenes generate`` outputs; layouts may be mixed)."""
+    out: Path
+    """Output folder (checkpoint, config, logs)."""
+    val_scenes: tuple[Path, ...] = ()
+    """Validation scene folders: scenes of objects held out from training (the decoder's too)."""
+    decoder: Path | None = None
+    """Decoder checkpoint whose shape codes are the targets (default: the shipped decoder)."""
+    preset: Literal["tiny", "small", "paper"] = "small"
+    epochs: int = 30
+    batch_size: int = 8
+    lr: float = 6e-4
+    seed: int = 0
+    max_minutes: float = 0.0
+    """Stop after this much training time (0: no limit); the checkpoint is written either way."""
+    val_every: int = 5
+    val_depth: Literal["realistic", "true"] = "realistic"
+    accelerator: Literal["auto", "cpu", "gpu"] = "auto"
+    devices: int = 1
+    num_nodes: int = 1
+    strategy: Literal["auto", "ddp", "ddp_spawn"] = "auto"
+    precision: Literal["32-true", "bf16-mixed", "16-mixed"] = "32-true"
+    threads: int = 0
+    """torch CPU threads (0: torch default)."""
+    workers: int = 1
+    """Data loader worker processes."""
+    resume: bool = True
+    """Resume from OUT/lightning/last.ckpt when it exists."""
+    progress: bool = True
+    augment: AugmentConfig = field(default_factory=AugmentConfig)
+    loss: EncoderLossConfig = field(default_factory=EncoderLossConfig)
+    encoder_overrides: dict[str, int | float | str] = field(default_factory=dict)
+    """Override preset fields (Python API), e.g. input_width / input_height."""
+
+    def encoder_config(self, code_dim: int) -> EncoderConfig:
+        return replace(PRESETS[self.preset], **{**self.encoder_overrides, "code_dim": code_dim})
+
+
+def _loaders(cfg: TrainEncoderConfig, enc_cfg: EncoderConfig, codes: dict):
+    from torch.utils.data import DataLoader
+
+    from centerart.training.encoder_data import EncoderViewDataset, collate, collect_views
+
+    train_ds = EncoderViewDataset(collect_views(list(cfg.scenes)), enc_cfg, codes, cfg.augment, cfg.seed)
+    if len(train_ds) < cfg.batch_size:
+        raise CenterArtError(f"{len(train_ds)} training views, fewer than --batch-size {cfg.batch_size}")
+    gen = torch.Generator().manual_seed(cfg.seed)
+    common = {"batch_size": cfg.batch_size, "collate_fn": collate, "num_workers": cfg.workers}
+    train = DataLoader(train_ds, shuffle=True, drop_last=True, generator=gen, **common)
+    val = None
+    if cfg.val_scenes:
+        val_ds = EncoderViewDataset(collect_views(list(cfg.val_scenes)), enc_cfg, codes, None, depth=cfg.val_depth)
+        val = DataLoader(val_ds, shuffle=False, **common)
+    return train, val
+
+
+def _trainer(cfg: TrainEncoderConfig, out: Path, has_val: bool):
+    import lightning as L
+    from lightning.pytorch.callbacks import ModelCheckpoint, TQDMProgressBar
+    from lightning.pytorch.loggers import CSVLogger, TensorBoardLogger
+
+    ckpt_cb = ModelCheckpoint(dirpath=out / "lightning", save_last=True, save_top_k=0)
+    callbacks = [ckpt_cb, TQDMProgressBar(refresh_rate=5)] if cfg.progress else [ckpt_cb]
+    return L.Trainer(
+        max_epochs=cfg.epochs,
+        max_time={"minutes": cfg.max_minutes} if cfg.max_minutes > 0 else None,
+        accelerator=cfg.accelerator,
+        devices=cfg.devices,
+        num_nodes=cfg.num_nodes,
+        strategy=cfg.strategy,
+        precision=cfg.precision,
+        logger=[CSVLogger(out / "logs", name="csv"), TensorBoardLogger(out / "logs", name="tensorboard")],
+        callbacks=callbacks,
+        enable_progress_bar=cfg.progress,
+        check_val_every_n_epoch=cfg.val_every if has_val else None,
+        limit_val_batches=1.0 if has_val else 0,
+        num_sanity_val_steps=0,
+        log_every_n_steps=5,
+        enable_model_summary=False,
+    )
+
+
+def train_encoder(cfg: TrainEncoderConfig) -> dict:
+    """Train (or resume), validate, export ``OUT/encoder.pt``; returns the checkpoint path and metrics."""
+    import lightning as L
+
+    from centerart.models.checkpoint import default_checkpoint, load_shape_codes
+    from centerart.models.encoder.checkpoint import save_encoder
+    from centerart.training.encoder_module import EncoderModule
+
+    decoder_path = Path(cfg.decoder) if cfg.decoder is not None else default_checkpoint()
+    codes = load_shape_codes(decoder_path)
+    if cfg.threads > 0:
+        torch.set_num_threads(cfg.threads)
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    L.seed_everything(cfg.seed, workers=True, verbose=False)
+    enc_cfg = cfg.encoder_config(code_dim=len(next(iter(codes.values()))))
+    train_loader, val_loader = _loaders(cfg, enc_cfg, codes)
+    config_dict = json.loads(json.dumps({**asdict(cfg), "encoder": enc_cfg.to_dict()}, default=str))
+    atomic_write_json(out / "config.json", config_dict)
+
+    module = EncoderModule(enc_cfg, cfg.loss, cfg.lr, cfg.epochs, codes=codes)
+    trainer = _trainer(cfg, out, val_loader is not None)
+    last = out / "lightning" / "last.ckpt"
+    resumed = cfg.resume and last.is_file()
+    t0 = time.perf_counter()
+    trainer.fit(module, train_loader, val_loader, ckpt_path=str(last) if resumed else None)
+    seconds = time.perf_counter() - t0
+    if val_loader is not None:
+        trainer.validate(module, val_loader, verbose=False)  # final numbers with the final weights
+    metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
+    images = trainer.global_step * cfg.batch_size * cfg.devices * cfg.num_nodes
+    metrics.update(train_seconds_this_run=seconds, steps=trainer.global_step, epochs=trainer.current_epoch)
+    metrics["resumed"] = bool(resumed)
+    metrics["train_images_per_second"] = images / max(seconds, 1e-9)  # since the start of this run's steps
+    path = save_encoder(out / "encoder.pt", module.encoder.cpu(), decoder_path, sorted(codes), config_dict, metrics)
+    atomic_write_json(out / "metrics.json", metrics)
+    return {"checkpoint": path, "metrics": metrics}

@@ -1,0 +1,61 @@
+"""Encoder losses: per-object terms see object cells only; the pose term is zero for a perfect prediction."""
+
+import numpy as np
+import torch
+
+from centerart.models.encoder.config import PRESETS
+from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
+from centerart.models.encoder.network import OFFSET_SCALE_PX, RGBDEncoder, cell_centers
+
+
+def _batch(h=32, w=48):
+    K = torch.tensor([[50.0, 0, 23.5], [0, 50.0, 15.5], [0, 0, 1]])
+    cell_object = torch.full((1, 4, 6), -1, dtype=torch.long)
+    cell_object[0, 1:3, 2:4] = 0
+    m = 8
+    batch = {
+        "heatmap": torch.zeros(1, h, w),
+        "cell_object": cell_object,
+        "cell_weight": (cell_object >= 0).float() * 0.9,
+        "K": K[None],
+        "rotation": torch.eye(3).expand(1, m, 3, 3).clone(),
+        "translation": torch.tensor([0.1, -0.05, 2.0]).expand(1, m, 3).clone(),
+        "shape_code": torch.zeros(1, m, 32),
+        "shape_code_valid": torch.ones(1, m, dtype=torch.bool),
+        "joint_code": torch.full((1, m), 0.5),
+        "joint_type": torch.zeros(1, m, dtype=torch.long),
+        "axis_direction": torch.tensor([0.0, 1.0, 0.0]).expand(1, m, 3).clone(),
+        "axis_point_offset": torch.zeros(1, m, 3),
+        "joint_state": torch.full((1, m), 0.3),
+    }
+    return batch
+
+
+def test_background_cells_do_not_change_object_terms():
+    torch.manual_seed(0)
+    enc = RGBDEncoder(PRESETS["tiny"])
+    batch = _batch()
+    out = enc(torch.rand(1, 3, 32, 48), torch.rand(1, 1, 32, 48) + 1)
+    _, terms = encoder_loss(out, batch, EncoderLossConfig())
+    bg = batch["cell_object"] < 0
+    for f in out.dense.values():
+        f.data[:, :, bg[0]] += 100.0
+    _, terms2 = encoder_loss(out, batch, EncoderLossConfig())
+    for k in terms:
+        assert torch.allclose(terms[k], terms2[k]), k
+
+
+def test_perfect_pose_prediction_has_zero_pose_loss():
+    enc = RGBDEncoder(PRESETS["tiny"])
+    batch = _batch()
+    out = enc(torch.rand(1, 3, 32, 48), torch.rand(1, 1, 32, 48) + 1)
+    t = batch["translation"][0, 0]
+    K = batch["K"][0]
+    uv = torch.stack([K[0, 0] * t[0] / t[2] + K[0, 2], K[1, 1] * t[1] / t[2] + K[1, 2]])
+    cells = cell_centers(4, 6, 8)
+    out.dense["rotation"].data[:] = torch.eye(3).reshape(9, 1, 1)
+    out.dense["center_offset"].data[0] = ((uv - cells) / OFFSET_SCALE_PX).permute(2, 0, 1)
+    out.dense["center_depth"].data[:] = t[2]
+    _, terms = encoder_loss(out, batch, EncoderLossConfig())
+    assert float(terms["pose"]) < 1e-5
+    assert np.isfinite(float(terms["heatmap"]))
