@@ -91,6 +91,13 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "reconstructions with top grasps at several joint states",
         ),
     },
+    "encoder": {
+        "show": Command(
+            "centerart.viz.encoder_sheet:ShowEncoderConfig",
+            "centerart.commands:encoder_show",
+            "encoder predictions (heatmap, peaks, poses, joint axes) next to the ground truth",
+        ),
+    },
     "eval": {
         "decoder": Command(
             "centerart.evaluation.decoder_eval:EvalDecoderConfig",

@@ -104,6 +104,12 @@ def train_encoder(cfg) -> None:
     print(f"wrote {result['checkpoint']}")
 
 
+def encoder_show(cfg) -> None:
+    from centerart.viz.encoder_sheet import show_encoder
+
+    print(f"wrote {show_encoder(cfg)}")
+
+
 def decoder_show(cfg) -> None:
     from centerart.inference.decoder_show import show_decoder
 

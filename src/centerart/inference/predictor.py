@@ -1,0 +1,169 @@
+"""``Predictor``: one RGB-D image and its intrinsics in; every articulated object's pose, joint, shape and ranked
+grasps out, in the OpenCV camera frame (metres, radians).
+
+Pipeline: letterbox and encode (:mod:`centerart.models.encoder.detect`) -> heatmap peaks -> per object: shape
+code, joint code, pose, joint type / axis / state -> decoder: grasps on the moving part in the object frame (a
+coarse reconstruction pass supplies the surface shell the grasps come from) -> optional refinement against the
+observed depth -> grasps mapped to the camera frame, collision-checked against the observed point cloud,
+ranked. Meshes are decoded only when asked for (:meth:`ObjectPrediction.mesh`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from centerart.geometry.camera import Intrinsics, backproject_depth
+from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_shape_and_grasps
+from centerart.inference.grasp_filter import CollisionFilterConfig, collision_free
+from centerart.inference.inputs import check_inputs
+from centerart.inference.reconstruction import MeshConfig, reconstruct_object
+from centerart.inference.refinement import RefineConfig, refine_pose_icp
+from centerart.models.encoder.readout import PEAK_THRESHOLD, Detection
+
+
+@dataclass(frozen=True)
+class PredictorConfig:
+    """How predictions are made (the CLI's ``centerart predict`` options generate from this)."""
+
+    peak_threshold: float = PEAK_THRESHOLD
+    """Heatmap peaks above this are objects."""
+    top_k_grasps: int = 10
+    grasp_resolution: int = 48
+    """Lattice cells (longest side) of the pass that finds the surface shell the grasps are read from."""
+    mesh_resolution: int = 128
+    """Lattice cells (longest side) of meshes decoded on demand."""
+    refine: RefineConfig = field(default_factory=RefineConfig)
+    collision: CollisionFilterConfig = field(default_factory=CollisionFilterConfig)
+
+
+@dataclass
+class ObjectPrediction:
+    """One detected object; every pose and vector is in the OpenCV camera frame of the input image."""
+
+    score: float
+    camera_T_object: np.ndarray
+    joint_type: str
+    joint_type_probability: float
+    axis_direction: np.ndarray
+    axis_point: np.ndarray
+    joint_state: float
+    """Metric joint state (rad for revolute, m for prismatic), from the encoder's joint-state head."""
+    joint_state_normalized: float
+    """(q - lower) / (upper - lower) as the decoder reads it (the encoder's joint code)."""
+    shape_code: np.ndarray
+    grasp_poses: np.ndarray
+    """(K, 4, 4) TCP poses (z approach, y finger closing), ranked best first."""
+    grasp_scores: np.ndarray
+    grasp_opening_directions: np.ndarray
+    """(K, 3) unit vectors: the direction the grasped point moves when the joint opens (close: the opposite)."""
+    mask: np.ndarray | None = field(default=None, repr=False)
+    peak_uv: np.ndarray | None = None
+    refinement: dict = field(default_factory=dict)
+    _mesher: object = field(default=None, repr=False)
+
+    @property
+    def joint_unit(self) -> str:
+        return "rad" if self.joint_type == "revolute" else "m"
+
+    def mesh(self, resolution: int | None = None):
+        """The complete mesh (trimesh, camera frame) decoded at the predicted shape and joint codes."""
+        return self._mesher(self, resolution)
+
+
+def opening_directions(grasps_cam: np.ndarray, joint_type: str, axis_dir: np.ndarray, axis_pt: np.ndarray):
+    """Where each grasp point moves when the joint state grows (opens): the tangent of the hinge circle
+    (revolute, right-hand rule about the axis) or the axis itself (prismatic)."""
+    if len(grasps_cam) == 0:
+        return np.zeros((0, 3))
+    if joint_type == "prismatic":
+        return np.tile(axis_dir, (len(grasps_cam), 1))
+    tangent = np.cross(axis_dir, grasps_cam[:, :3, 3] - axis_pt)
+    return tangent / np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-9)
+
+
+class Predictor:
+    """Encoder + decoder. ``Predictor()`` loads the shipped weights; pass checkpoint paths to use your own."""
+
+    def __init__(self, encoder_ckpt=None, decoder_ckpt=None, device: str = "cpu", config=None):
+        from centerart.models.checkpoint import default_checkpoint, load_decoder
+        from centerart.models.encoder.checkpoint import load_encoder
+
+        self.device = torch.device(device)
+        decoder_ckpt = Path(decoder_ckpt) if decoder_ckpt is not None else default_checkpoint()
+        self.encoder = load_encoder(encoder_ckpt, decoder_path=decoder_ckpt, device=self.device)
+        self.decoder = load_decoder(decoder_ckpt, device=self.device)
+        self.config = config or PredictorConfig()
+        self.timing: dict[str, float] = {}
+
+    @classmethod
+    def from_pretrained(cls, device: str = "cpu", config: PredictorConfig | None = None) -> Predictor:
+        return cls(None, None, device, config)
+
+    def predict(self, rgb: np.ndarray, depth: np.ndarray, K) -> list[ObjectPrediction]:
+        """Objects in one RGB (H, W, 3) uint8 image with depth (H, W) in metres (holes 0 / NaN) and 3x3 ``K``."""
+        from centerart.models.encoder.detect import detect_objects
+
+        h, w = np.asarray(depth).shape[:2]
+        camera = K if isinstance(K, Intrinsics) else Intrinsics.from_matrix(K, w, h)
+        depth = check_inputs(np.asarray(rgb), np.asarray(depth), camera)
+        t0 = time.perf_counter()
+        encoded = detect_objects(self.encoder.encoder, rgb, depth, camera, self.config.peak_threshold)
+        self.timing = {"encoder_s": time.perf_counter() - t0}
+        self.last_heatmap = encoded.heatmap
+        scene_points = backproject_depth(depth, camera.K)
+        preds = [self._predict_object(d, depth, camera, scene_points) for d in encoded.detections]
+        self.timing["objects_s"] = time.perf_counter() - t0 - self.timing["encoder_s"]
+        return preds
+
+    def _predict_object(self, det: Detection, depth, camera: Intrinsics, scene_points) -> ObjectPrediction:
+        cfg = self.config
+        mesh_cfg = MeshConfig(resolution=cfg.grasp_resolution)
+        grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k_grasps * 3, cfg.top_k_grasps))
+        code = det.shape_code.astype(np.float32)
+        recon, grasps = predict_shape_and_grasps(
+            self.decoder.decoder, code, det.joint_code, self.decoder.bounds, mesh_cfg, grasp_cfg, self.device
+        )
+        pose, info = det.camera_T_object, {}
+        if cfg.refine.icp and det.mask is not None:
+            observed = backproject_depth(depth, camera.K, mask=det.mask)
+            pose, info = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
+        grasps_cam = pose @ grasps.poses if len(grasps) else np.zeros((0, 4, 4))
+        scores = grasps.scores
+        if cfg.collision.enabled and len(grasps_cam):
+            keep = collision_free(grasps_cam, scene_points, cfg.collision)
+            grasps_cam, scores = grasps_cam[keep], scores[keep]
+        grasps_cam, scores = grasps_cam[: cfg.top_k_grasps], scores[: cfg.top_k_grasps]
+        axis_point = det.axis_point + (pose[:3, 3] - det.camera_T_object[:3, 3])  # the axis moves with ICP's shift
+        return ObjectPrediction(
+            score=det.score,
+            camera_T_object=pose,
+            joint_type=det.joint_type,
+            joint_type_probability=det.joint_type_probability,
+            axis_direction=det.axis_direction,
+            axis_point=axis_point,
+            joint_state=det.joint_state,
+            joint_state_normalized=det.joint_code,
+            shape_code=code,
+            grasp_poses=grasps_cam,
+            grasp_scores=np.asarray(scores, float),
+            grasp_opening_directions=opening_directions(grasps_cam, det.joint_type, det.axis_direction, axis_point),
+            mask=det.mask,
+            peak_uv=det.peak_uv,
+            refinement=info,
+            _mesher=self._mesh,
+        )
+
+    def _mesh(self, pred: ObjectPrediction, resolution: int | None):
+        res = resolution or self.config.mesh_resolution
+        recon = reconstruct_object(
+            self.decoder.decoder, pred.shape_code, pred.joint_state_normalized, self.decoder.bounds,
+            MeshConfig(resolution=res), self.device,
+        )  # fmt: skip
+        mesh = recon.mesh.copy()
+        mesh.apply_transform(pred.camera_T_object)
+        return mesh
