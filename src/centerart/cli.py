@@ -105,6 +105,13 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "decoder shape/grasp/physics metrics per split",
         ),
     },
+    "predict": {
+        "": Command(
+            "centerart.predict:PredictConfig",
+            "centerart.commands:predict",
+            "objects, joints, meshes and ranked grasps from one RGB-D image (default: a bundled example)",
+        )
+    },
     "demo": {
         "": Command(
             "centerart.demo:DemoConfig",

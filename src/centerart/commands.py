@@ -80,6 +80,23 @@ def scenes_show(cfg) -> None:
     print(f"wrote {show_scenes(cfg)}")
 
 
+def predict(cfg) -> None:
+    import numpy as np
+
+    from centerart.predict import run_predict
+
+    record = run_predict(cfg)
+    for obj in record["objects"]:
+        j, t = obj["joint"], np.asarray(obj["camera_T_object"])[:3, 3]
+        print(
+            f"object {obj['index']}: score {obj['score']:.2f}, {j['type']} joint at {j['state']:.2f} {j['unit']}, "
+            f"centre ({t[0]:+.2f}, {t[1]:+.2f}, {t[2]:.2f}) m, {len(obj['grasps'])} grasps"
+        )
+    timing = ", ".join(f"{k} {v:.2f}" for k, v in record["timing_s"].items())
+    print(f"{len(record['objects'])} objects ({timing})")
+    print(f"wrote {cfg.out}/ (predictions.json, overlay.png, scene.glb, meshes); 3-D view: centerart view {cfg.out}")
+
+
 def demo(cfg) -> None:
     from centerart.demo import run_demo
 
