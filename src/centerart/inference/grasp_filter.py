@@ -16,6 +16,8 @@ from scipy.spatial import cKDTree
 
 from centerart.grasps.gripper import MAX_OPENING, gripper_boxes
 
+MIN_HALF_EXTENT_M = 0.004  # the 1 cm thin fingers keep at least 8 mm of checked thickness after the margin
+
 
 @dataclass(frozen=True)
 class CollisionFilterConfig:
@@ -39,7 +41,8 @@ def collision_free(grasps: np.ndarray, points: np.ndarray, cfg: CollisionFilterC
         inside = np.zeros(len(near), bool)
         for extents, tcp_T_box in boxes:
             local = (near - (pose @ tcp_T_box)[:3, 3]) @ (pose @ tcp_T_box)[:3, :3]
-            inside |= np.all(np.abs(local) < extents / 2 - cfg.margin_m, axis=1)
+            half = np.maximum(extents / 2 - cfg.margin_m, MIN_HALF_EXTENT_M)
+            inside |= np.all(np.abs(local) < half, axis=1)
         keep[k] = inside.sum() <= cfg.max_points
     return keep
 

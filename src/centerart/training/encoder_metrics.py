@@ -33,7 +33,10 @@ def view_metrics(detections: list[Detection], labels: dict, codes: dict | None =
         "true_positives": int(sum(1 for _, j in pairs if visible[j])),
     }
     rows = [object_errors(detections[i], objects[j], codes) for i, j in pairs]
-    return {"counts": counts, "rows": rows}
+    for (i, j), row in zip(pairs, rows, strict=True):
+        row["prediction"], row["label"] = i, j
+    recall_rows = [{"category": o["category"], "found": j in matched_true} for j, o in enumerate(objects) if visible[j]]
+    return {"counts": counts, "rows": rows, "recall_rows": recall_rows}
 
 
 def object_errors(det: Detection, obj: dict, codes: dict | None = None) -> dict:
@@ -57,6 +60,19 @@ def object_errors(det: Detection, obj: dict, codes: dict | None = None) -> dict:
     if codes is not None and obj["object_id"] in codes:
         row["shape_code_l1"] = float(np.abs(det.shape_code - codes[obj["object_id"]]).mean())
     return row
+
+
+def summarize_by_category(results: list[dict]) -> dict[str, dict]:
+    """Recall and median errors per object category."""
+    cats = sorted({r["category"] for res in results for r in res["recall_rows"]})
+    out = {}
+    for cat in cats:
+        found = [r["found"] for res in results for r in res["recall_rows"] if r["category"] == cat]
+        rows = [row for res in results for row in res["rows"] if row["category"] == cat]
+        out[cat] = {"true_objects": len(found), "recall": float(np.mean(found)), "matched": len(rows)}
+        if rows:
+            out[cat].update(summarize_rows(rows))
+    return out
 
 
 def summarize(results: list[dict]) -> dict:
