@@ -31,7 +31,7 @@ from centerart.scenes.description import (
     ObjectSpec,
     SceneDescription,
     StereoSpec,
-    load_object,
+    load_object_in_default_frame,
     pose_list,
 )
 
@@ -230,7 +230,7 @@ class _Placed:
 def _load(entry: AssetEntry, rng) -> tuple[ArticulatedObject, float, dict[str, float]]:
     obj = ArticulatedObject.load(entry.path)
     q, held = sample_states(obj, rng)
-    return load_object(entry.path, obj.target_joint, obj.scale, held), q, held
+    return load_object_in_default_frame(entry.path, obj.target_joint, obj.scale, held), q, held
 
 
 def _translation(x, y, z) -> np.ndarray:
