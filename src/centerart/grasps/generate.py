@@ -63,7 +63,8 @@ class GenerateGraspsConfig:
     workers: int | None = None
     """Parallel worker processes (default: all cores)."""
     ray_address: str | None = None
-    """Run on a Ray cluster at this address instead of a local process pool."""
+    """Run on a Ray cluster at this address instead of a local process pool; ``local`` starts a Ray instance on
+    this machine with ``workers`` CPUs."""
 
 
 def state_values(obj: ArticulatedObject, n: int) -> np.ndarray:
