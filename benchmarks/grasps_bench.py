@@ -28,7 +28,7 @@ from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
 from centerart.grasps import executor as ex
 from centerart.grasps.candidates import CandidateSampler
 from centerart.grasps.generate import GenerateGraspsConfig, generate_grasps
-from centerart.grasps.sim_world import connect, load_object
+from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
 from centerart.utils.manifest import code_version
 
 
@@ -45,7 +45,7 @@ def bench_executor(objects: list[Path], trials_per_object: int = 150) -> dict:
         obj = ArticulatedObject.load(folder)
         q = obj.denormalize(0.4)
         client = connect()
-        target = load_object(client, obj, q)
+        target = spawn_object_in_pybullet(client, obj, q)
         executor = ex.GraspExecutor(client)
         sampler = CandidateSampler(obj, q, np.random.default_rng(0))
         poses, _ = sampler.sample(4 * trials_per_object)

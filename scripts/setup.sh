@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Set up centerart on Debian 12 (bookworm): system packages, a virtual environment in .venv, the package.
 #   bash scripts/setup.sh          # runtime
-#   bash scripts/setup.sh --dev    # + test and lint tools
+#   bash scripts/setup.sh --dev    # + test and lint tools, and Ray (the cluster extra, which the tests exercise)
 # Idempotent: a second run only checks that everything is there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 extras=""
-[[ "${1:-}" == "--dev" ]] && extras="[dev]"
+[[ "${1:-}" == "--dev" ]] && extras="[dev,cluster]"
 
 SUDO=""
 if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi

@@ -8,7 +8,7 @@ import pytest
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.geometry.transforms import make_pose
 from centerart.grasps import executor as ex
-from centerart.grasps.sim_world import connect, load_object
+from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
 
 
 def _handle_grasp(obj: ArticulatedObject, q: float) -> np.ndarray:
@@ -25,7 +25,7 @@ def _world(obj, q):
     import pybullet as pb
 
     client = connect()
-    target = load_object(client, obj, q)
+    target = spawn_object_in_pybullet(client, obj, q)
     return client, target, ex.GraspExecutor(client), pb
 
 

@@ -16,7 +16,7 @@ from centerart.grasps.candidates import moving_solid
 from centerart.grasps.generate import GenerateGraspsConfig, generate_grasps, state_values
 from centerart.grasps.gripper import MAX_OPENING, gripper_boxes
 from centerart.grasps.labels import StateLabels, load_object_labels
-from centerart.grasps.sim_world import connect, load_object
+from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
 
 STATES = 3
 PER_STATE = 12
@@ -70,7 +70,7 @@ def test_resimulating_stored_successes_reproduces_them(labels_dir, small_objects
     for (oid, _k), lab in _all_labels(labels_dir).items():
         obj = ArticulatedObject.load(small_objects / oid)
         client = connect()
-        target = load_object(client, obj, lab.q)
+        target = spawn_object_in_pybullet(client, obj, lab.q)
         executor = ex.GraspExecutor(client)
         for pose in lab.poses:
             reproduced += executor.execute(pose, target, lab.direction).success

@@ -88,7 +88,7 @@ def test_bad_scene_file_is_a_clear_error(tmp_path):
 
 def test_scene_objects_keep_the_default_frame_when_other_joints_are_held_open(scene_objects):
     from centerart.assets.articulated_object import ArticulatedObject
-    from centerart.scenes.description import load_object
+    from centerart.scenes.description import load_object_in_default_frame
 
     for folder in sorted(p for p in scene_objects.iterdir() if p.is_dir()):
         default = ArticulatedObject.load(folder)
@@ -96,7 +96,7 @@ def test_scene_objects_keep_the_default_frame_when_other_joints_are_held_open(sc
             continue
         name = next(iter(default.held_states))
         j = default.joints[name]
-        opened = load_object(folder, held_states={name: j.upper})
+        opened = load_object_in_default_frame(folder, held_states={name: j.upper})
         np.testing.assert_allclose(opened.canonical_T_base, default.canonical_T_base)
         assert opened.held_states[name] == j.upper
         # The opened joint's link moved, the frame did not.

@@ -123,14 +123,7 @@ class ArticulatedObject:
             AssetError: naming the file and the problem (missing or malformed URDF, missing mesh, a target joint
                 without limits, ...).
         """
-        folder = Path(path)
-        if folder.name.endswith(".urdf"):
-            folder = folder.parent
-        urdf_path = folder / "mobility.urdf"
-        if not folder.is_dir():
-            raise AssetError(folder, "no such object folder")
-        if not urdf_path.is_file():
-            raise AssetError(urdf_path, "missing URDF (expected PartNet-Mobility layout: mobility.urdf)")
+        folder, urdf_path = _object_folder(path)
         meta = _read_meta(folder)
         robot = _parse_urdf(urdf_path)
         model_cat = str(meta.get("model_cat", "Unknown"))
@@ -149,19 +142,7 @@ class ArticulatedObject:
         # Visual/collision parts in raw (unscaled) link coordinates; scale is applied afterwards.
         visual_parts = _load_parts(robot, folder, urdf_path, collision=False)
         collision_parts = _load_parts(robot, folder, urdf_path, collision=True)
-
-        chosen = target_joint or meta.get("target_joint") or _default_target(robot, folder)
-        if chosen is None:
-            raise AssetError(urdf_path, "has no revolute or prismatic joint to act on")
-        if chosen not in raw_joints:
-            raise AssetError(urdf_path, f"target joint {chosen!r} not found (joints: {sorted(raw_joints)})")
-        raw_target = raw_joints[chosen]
-        if raw_target.type not in ("revolute", "prismatic"):
-            raise AssetError(urdf_path, f"target joint {chosen!r} is {raw_target.type}, not revolute/prismatic")
-        if raw_target.limit is None or raw_target.limit.lower is None or raw_target.limit.upper is None:
-            raise AssetError(urdf_path, f"joint {chosen!r} has no <limit lower=... upper=...>")
-        if not raw_target.limit.upper > raw_target.limit.lower:
-            raise AssetError(urdf_path, f"joint {chosen!r} has an empty range {raw_target.limit}")
+        chosen = _checked_target(robot, raw_joints, folder, urdf_path, target_joint or meta.get("target_joint"))
 
         if scale is None:
             scale = 1.0 if generated else _auto_scale(robot, raw_joints, visual_parts, roots[0], category)
@@ -169,13 +150,7 @@ class ArticulatedObject:
         joints = {name: _scaled_joint(j, scale) for name, j in raw_joints.items()}
         visual_parts = {k: [_scaled_part(p, scale) for p in v] for k, v in visual_parts.items()}
         collision_parts = {k: [_scaled_part(p, scale) for p in v] for k, v in collision_parts.items()}
-
-        held = {n: (j.lower if j.lower is not None else 0.0) for n, j in joints.items() if j.movable}
-        held.pop(chosen, None)
-        for name, value in (held_states or {}).items():
-            if name not in held:
-                raise AssetError(urdf_path, f"held_states names {name!r}, which is not a non-target movable joint")
-            held[name] = float(value)
+        held = _held_values(joints, chosen, held_states, urdf_path)
 
         front = str(meta.get("front_axis", "+x" if generated else "-x"))
         if front not in BASE_ROTATIONS:
@@ -344,6 +319,52 @@ class ArticulatedObject:
 
 
 # ---------------------------------------------------------------------- helpers
+def _object_folder(path: str | Path) -> tuple[Path, Path]:
+    """(object folder, its mobility.urdf) of a folder or URDF path; AssetError when either is missing."""
+    folder = Path(path)
+    if folder.name.endswith(".urdf"):
+        folder = folder.parent
+    urdf_path = folder / "mobility.urdf"
+    if not folder.is_dir():
+        raise AssetError(folder, "no such object folder")
+    if not urdf_path.is_file():
+        raise AssetError(urdf_path, "missing URDF (expected PartNet-Mobility layout: mobility.urdf)")
+    return folder, urdf_path
+
+
+def _checked_target(
+    robot: yourdfpy.Robot, raw_joints: dict[str, yourdfpy.Joint], folder: Path, urdf_path: Path, requested: str | None
+) -> str:
+    """Name of the target joint: ``requested`` or the default one; AssetError unless it is a limited
+    revolute/prismatic joint with a non-empty range."""
+    chosen = requested or _default_target(robot, folder)
+    if chosen is None:
+        raise AssetError(urdf_path, "has no revolute or prismatic joint to act on")
+    if chosen not in raw_joints:
+        raise AssetError(urdf_path, f"target joint {chosen!r} not found (joints: {sorted(raw_joints)})")
+    raw_target = raw_joints[chosen]
+    if raw_target.type not in ("revolute", "prismatic"):
+        raise AssetError(urdf_path, f"target joint {chosen!r} is {raw_target.type}, not revolute/prismatic")
+    if raw_target.limit is None or raw_target.limit.lower is None or raw_target.limit.upper is None:
+        raise AssetError(urdf_path, f"joint {chosen!r} has no <limit lower=... upper=...>")
+    if not raw_target.limit.upper > raw_target.limit.lower:
+        raise AssetError(urdf_path, f"joint {chosen!r} has an empty range {raw_target.limit}")
+    return chosen
+
+
+def _held_values(
+    joints: dict[str, Joint], target: str, held_states: dict[str, float] | None, urdf_path: Path
+) -> dict[str, float]:
+    """Metric values of the non-target movable joints: ``held_states`` where given, else each lower limit (or 0)."""
+    held = {n: (j.lower if j.lower is not None else 0.0) for n, j in joints.items() if j.movable}
+    held.pop(target, None)
+    for name, value in (held_states or {}).items():
+        if name not in held:
+            raise AssetError(urdf_path, f"held_states names {name!r}, which is not a non-target movable joint")
+        held[name] = float(value)
+    return held
+
+
 def _read_meta(folder: Path) -> dict:
     meta_path = folder / "meta.json"
     if not meta_path.is_file():

@@ -254,97 +254,35 @@ class Builder:
 
     # ------------------------------------------------------------- handles
     def _handle(self, groups: list[VisualGroup], h: dict, lo, hi, free_edge: str, strip: float) -> None:
+        """Add handle ``h`` (see :meth:`sample_handle`) to the front face of the box lo..hi (body frame, m).
+
+        ``free_edge`` (left, right, top, bottom; anything else: a drawer) is the edge that opens; ``strip`` (m) is
+        the height of the control strip along the front's top edge (0 without one), which grips stay below. The
+        handle's geometry goes to ``groups``; its :class:`HandleSpec` waits on ``self.handles`` for the link that
+        receives the front.
+        """
         kind = h["type"]
         if kind == "none":
             return
-        fx = hi[0]
-        color = rgba(h["color"])
-        inset = h["inset"]
         vertical = free_edge in ("left", "right")
-        # grip centre on the front face
-        if free_edge == "right":
-            c = np.array([fx, hi[1] - inset, lo[2] + h["along"] * (hi[2] - lo[2])])
-        elif free_edge == "left":
-            c = np.array([fx, lo[1] + inset, lo[2] + h["along"] * (hi[2] - lo[2])])
-        elif free_edge == "top":
-            c = np.array([fx, (lo[1] + hi[1]) / 2, hi[2] - strip - inset])
-        elif free_edge == "bottom":
-            c = np.array([fx, (lo[1] + hi[1]) / 2, lo[2] + inset])
-        else:  # drawer: centre, in the upper part of tall fronts
-            c = np.array([fx, (lo[1] + hi[1]) / 2, lo[2] + max(0.5, h["along"]) * (hi[2] - lo[2])])
-            c[2] = min(c[2], hi[2] - 0.04)
+        c = _grip_centre(h, lo, hi, free_edge, strip)
         span = (hi[2] - lo[2]) if vertical else (hi[1] - lo[1])
         length = float(min(h["length"], 0.85 * span))
         ax = 2 if vertical else 1
-        axis_vec = np.eye(3)[ax]
         # keep the grip on the front face
         lim_lo, lim_hi = lo[ax] + length / 2 + 0.01, hi[ax] - length / 2 - 0.01
         c[ax] = np.clip(c[ax], lim_lo, max(lim_lo, lim_hi))
-        r, s = h["radius"], h["standoff"]
         if kind in ("bar", "u"):
-            s = max(s, r + MIN_HANDLE_CLEARANCE + 0.002)
-            grip_c = c + np.array([s, 0.0, 0.0])
-            leg_off = length / 2 - (0.015 if kind == "bar" else r)
-            prims = []
-            if kind == "bar":
-                prims.append(cylinder_along(ax, grip_c, r, length))
-                for sign in (-1, 1):
-                    p = c + sign * leg_off * axis_vec + np.array([s / 2 - EMBED / 2, 0, 0])
-                    prims.append(cylinder_along(0, p, 0.75 * r, s + EMBED))
-            else:
-                half = np.full(3, r)
-                half[ax] = length / 2
-                prims.append(box_between(grip_c - half, grip_c + half))
-                for sign in (-1, 1):
-                    p = c + sign * leg_off * axis_vec
-                    leg_half = np.full(3, r)
-                    leg_half[0] = 0.0
-                    prims.append(
-                        box_between(p - leg_half - np.array([EMBED, 0, 0]), p + leg_half + np.array([s, 0, 0]))
-                    )
-            groups.append(VisualGroup("handle", prims, color, "metal"))
-            self.handles.append(HandleSpec(kind, "__pending__", grip_c, axis_vec, length, 2 * r, s - r))
+            prims, spec = _bar_handle(kind, c, ax, length, h["radius"], h["standoff"])
         elif kind == "knob":
-            kr, stem = h["knob_radius"], h["standoff"]
-            stem = min(max(stem, 0.018), 0.035)
-            prims = [
-                cylinder_along(0, c + np.array([stem / 2 - EMBED / 2, 0, 0]), 0.006, stem + EMBED),
-                cylinder_along(0, c + np.array([stem + 0.008, 0, 0]), kr, 0.016),
-            ]
-            groups.append(VisualGroup("handle", prims, color, "metal"))
-            self.handles.append(
-                HandleSpec(
-                    "knob",
-                    "__pending__",
-                    c + np.array([stem + 0.008, 0, 0]),
-                    np.array([1.0, 0, 0]),
-                    0.016,
-                    2 * kr,
-                    stem,
-                )
-            )
+            prims, spec = _knob_handle(c, h["knob_radius"], h["standoff"])
         elif kind == "lip":
-            # A pull ridge along the free edge, standing proud of the front.
-            depth, thick = h["lip_depth"], h["lip_thickness"]
-            half = np.zeros(3)
-            half[ax] = length / 2
             across = 1 if vertical else 2
-            edge = c.copy()
-            if free_edge == "right":
-                edge[across] = hi[1] - thick / 2
-            elif free_edge == "left":
-                edge[across] = lo[1] + thick / 2
-            elif free_edge in ("top", "center"):
-                edge[across] = hi[2] - strip - thick / 2
-            else:
-                edge[across] = lo[2] + thick / 2
-            half[across] = thick / 2
-            lo_p = edge - half + np.array([-EMBED, 0, 0])
-            hi_p = edge + half + np.array([depth, 0, 0])
-            groups.append(VisualGroup("handle", [box_between(lo_p, hi_p)], color, "metal"))
-            self.handles.append(HandleSpec("lip", "__pending__", (lo_p + hi_p) / 2, axis_vec, length, thick, 0.0))
+            prims, spec = _lip_handle(c, ax, across, length, h, lo, hi, free_edge, strip)
         else:
             raise ValueError(f"unknown handle type {kind!r}")
+        groups.append(VisualGroup("handle", prims, rgba(h["color"]), "metal"))
+        self.handles.append(spec)
 
     def sample_handle(self, kinds: tuple[str, ...], weights: tuple[float, ...], long_bar: bool = False) -> dict:
         rng = self.rng
@@ -380,6 +318,86 @@ class Builder:
             j.origin = j.origin - center
         params = {**params, "bounding_box_extents": (allpts.max(0) - allpts.min(0)).round(4).tolist()}
         return ObjectSpec(self.category, links, self.joints, target_joint, self.handles, params)
+
+
+def _grip_centre(h: dict, lo, hi, free_edge: str, strip: float) -> np.ndarray:
+    """Grip centre (body frame, m) on the front face x = hi[0] of the box lo..hi, near its ``free_edge``."""
+    fx = hi[0]
+    inset = h["inset"]
+    if free_edge == "right":
+        return np.array([fx, hi[1] - inset, lo[2] + h["along"] * (hi[2] - lo[2])])
+    if free_edge == "left":
+        return np.array([fx, lo[1] + inset, lo[2] + h["along"] * (hi[2] - lo[2])])
+    if free_edge == "top":
+        return np.array([fx, (lo[1] + hi[1]) / 2, hi[2] - strip - inset])
+    if free_edge == "bottom":
+        return np.array([fx, (lo[1] + hi[1]) / 2, lo[2] + inset])
+    # drawer: centre, in the upper part of tall fronts
+    c = np.array([fx, (lo[1] + hi[1]) / 2, lo[2] + max(0.5, h["along"]) * (hi[2] - lo[2])])
+    c[2] = min(c[2], hi[2] - 0.04)
+    return c
+
+
+def _bar_handle(kind: str, c: np.ndarray, ax: int, length: float, r: float, s: float) -> tuple[list, HandleSpec]:
+    """A bar (cylinder on two legs) or U (box) grip of radius ``r`` along body axis ``ax``, ``s`` (m) in front
+    of the front-face point ``c``; the standoff grows to leave MIN_HANDLE_CLEARANCE behind the grip."""
+    axis_vec = np.eye(3)[ax]
+    s = max(s, r + MIN_HANDLE_CLEARANCE + 0.002)
+    grip_c = c + np.array([s, 0.0, 0.0])
+    leg_off = length / 2 - (0.015 if kind == "bar" else r)
+    prims = []
+    if kind == "bar":
+        prims.append(cylinder_along(ax, grip_c, r, length))
+        for sign in (-1, 1):
+            p = c + sign * leg_off * axis_vec + np.array([s / 2 - EMBED / 2, 0, 0])
+            prims.append(cylinder_along(0, p, 0.75 * r, s + EMBED))
+    else:
+        half = np.full(3, r)
+        half[ax] = length / 2
+        prims.append(box_between(grip_c - half, grip_c + half))
+        for sign in (-1, 1):
+            p = c + sign * leg_off * axis_vec
+            leg_half = np.full(3, r)
+            leg_half[0] = 0.0
+            prims.append(box_between(p - leg_half - np.array([EMBED, 0, 0]), p + leg_half + np.array([s, 0, 0])))
+    return prims, HandleSpec(kind, "__pending__", grip_c, axis_vec, length, 2 * r, s - r)
+
+
+def _knob_handle(c: np.ndarray, kr: float, stem: float) -> tuple[list, HandleSpec]:
+    """A round knob of radius ``kr`` on a stem (its length clamped to 18-35 mm) out of the front-face point ``c``."""
+    stem = min(max(stem, 0.018), 0.035)
+    prims = [
+        cylinder_along(0, c + np.array([stem / 2 - EMBED / 2, 0, 0]), 0.006, stem + EMBED),
+        cylinder_along(0, c + np.array([stem + 0.008, 0, 0]), kr, 0.016),
+    ]
+    spec = HandleSpec(
+        "knob", "__pending__", c + np.array([stem + 0.008, 0, 0]), np.array([1.0, 0, 0]), 0.016, 2 * kr, stem
+    )
+    return prims, spec
+
+
+def _lip_handle(
+    c: np.ndarray, ax: int, across: int, length: float, h: dict, lo, hi, free_edge: str, strip: float
+) -> tuple[list, HandleSpec]:
+    """A pull ridge along the free edge, standing proud of the front (body frame, m)."""
+    depth, thick = h["lip_depth"], h["lip_thickness"]
+    half = np.zeros(3)
+    half[ax] = length / 2
+    edge = c.copy()
+    if free_edge == "right":
+        edge[across] = hi[1] - thick / 2
+    elif free_edge == "left":
+        edge[across] = lo[1] + thick / 2
+    elif free_edge in ("top", "center"):
+        edge[across] = hi[2] - strip - thick / 2
+    else:
+        edge[across] = lo[2] + thick / 2
+    half[across] = thick / 2
+    lo_p = edge - half + np.array([-EMBED, 0, 0])
+    hi_p = edge + half + np.array([depth, 0, 0])
+    return [box_between(lo_p, hi_p)], HandleSpec(
+        "lip", "__pending__", (lo_p + hi_p) / 2, np.eye(3)[ax], length, thick, 0.0
+    )
 
 
 def pick(rng: np.random.Generator, palette: str):

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from centerart.assets.categories import MODEL_CAT
-from centerart.assets.spec import ObjectSpec, Primitive
+from centerart.assets.spec import JointSpec, LinkSpec, ObjectSpec, Primitive, VisualGroup
 
 
 def _fmt(values) -> str:
@@ -47,7 +47,10 @@ def _geometry(parent: ET.Element, prim: Primitive) -> None:
 
 
 def write_object(spec: ObjectSpec, folder: Path, object_id: str, generator_info: dict) -> dict:
-    """Write ``spec`` into ``folder`` (which must exist and be empty). Returns the meta dictionary."""
+    """Write ``spec`` into ``folder`` (which must exist and be empty). Returns the meta dictionary.
+
+    Geometry is written in each link's frame (metres); masses in kg (see the module docstring for inertials).
+    """
     folder = Path(folder)
     (folder / "textured_objs").mkdir(parents=True, exist_ok=True)
     robot = ET.Element("robot", name=object_id)
@@ -55,49 +58,15 @@ def write_object(spec: ObjectSpec, folder: Path, object_id: str, generator_info:
     link_masses = {}
     for link in spec.links:
         el = ET.SubElement(robot, "link", name=link.name)
-        solid = link.mesh()
-        if link.name == "base":
-            mass, com, inertia = 50.0, np.zeros(3), np.eye(3) * 5.0
-        else:
-            solid.density = link.density
-            mass, com, inertia = float(solid.mass), solid.center_mass, np.asarray(solid.moment_inertia)
-        link_masses[link.name] = round(mass, 4)
-        inertial = ET.SubElement(el, "inertial")
-        ET.SubElement(inertial, "origin", xyz=_fmt(com), rpy="0 0 0")
-        ET.SubElement(inertial, "mass", value=f"{mass:.6g}")
-        ET.SubElement(
-            inertial,
-            "inertia",
-            ixx=f"{inertia[0, 0]:.6g}",
-            ixy=f"{inertia[0, 1]:.6g}",
-            ixz=f"{inertia[0, 2]:.6g}",
-            iyy=f"{inertia[1, 1]:.6g}",
-            iyz=f"{inertia[1, 2]:.6g}",
-            izz=f"{inertia[2, 2]:.6g}",
-        )
+        link_masses[link.name] = round(_add_inertial(el, link), 4)
         for group in link.groups:
-            fname = f"textured_objs/{link.name}-{group.name}.obj"
-            mesh = group.mesh()
-            _write_obj_with_colour(folder / fname, mesh, group.rgba, f"{link.name}-{group.name}")
-            vis = ET.SubElement(el, "visual", name=f"{link.name}-{group.name}")
-            ET.SubElement(vis, "origin", xyz="0 0 0", rpy="0 0 0")
-            ET.SubElement(ET.SubElement(vis, "geometry"), "mesh", filename=fname)
-            mat = ET.SubElement(vis, "material", name=f"{link.name}-{group.name}-{group.material}")
-            ET.SubElement(mat, "color", rgba=_fmt(group.rgba))
-            materials_meta[f"{link.name}-{group.name}"] = [group.material, list(group.rgba)]
+            materials_meta[f"{link.name}-{group.name}"] = _add_visual(el, link.name, group, folder)
         for prim in link.primitives():
             col = ET.SubElement(el, "collision")
             _origin(col, prim.pose)
             _geometry(col, prim)
     for j in spec.joints:
-        el = ET.SubElement(robot, "joint", name=j.name, type=j.type)
-        ET.SubElement(el, "origin", xyz=_fmt(j.origin), rpy="0 0 0")
-        ET.SubElement(el, "axis", xyz=_fmt(j.axis))
-        ET.SubElement(el, "parent", link=j.parent)
-        ET.SubElement(el, "child", link=j.child)
-        effort = 200.0 if j.type == "revolute" else 500.0
-        ET.SubElement(el, "limit", lower=_fmt([j.lower]), upper=_fmt([j.upper]), effort=f"{effort:g}", velocity="2")
-        ET.SubElement(el, "dynamics", damping=f"{j.damping:g}", friction=f"{j.friction:g}")
+        _add_joint(robot, j)
     xml = minidom.parseString(ET.tostring(robot)).toprettyxml(indent="  ")
     (folder / "mobility.urdf").write_text(xml)
 
@@ -106,7 +75,62 @@ def write_object(spec: ObjectSpec, folder: Path, object_id: str, generator_info:
         semantics.append(f"{j.child} {'hinge' if j.type == 'revolute' else 'slider'} {j.role}")
     (folder / "semantics.txt").write_text("\n".join(semantics) + "\n")
 
-    meta = {
+    meta = _meta(spec, object_id, materials_meta, link_masses, generator_info)
+    (folder / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
+    return meta
+
+
+def _add_inertial(el: ET.Element, link: LinkSpec) -> float:
+    """Add the link's <inertial> (solid of its density; a fixed 50 kg for the base); returns its mass (kg)."""
+    solid = link.mesh()
+    if link.name == "base":
+        mass, com, inertia = 50.0, np.zeros(3), np.eye(3) * 5.0
+    else:
+        solid.density = link.density
+        mass, com, inertia = float(solid.mass), solid.center_mass, np.asarray(solid.moment_inertia)
+    inertial = ET.SubElement(el, "inertial")
+    ET.SubElement(inertial, "origin", xyz=_fmt(com), rpy="0 0 0")
+    ET.SubElement(inertial, "mass", value=f"{mass:.6g}")
+    ET.SubElement(
+        inertial,
+        "inertia",
+        ixx=f"{inertia[0, 0]:.6g}",
+        ixy=f"{inertia[0, 1]:.6g}",
+        ixz=f"{inertia[0, 2]:.6g}",
+        iyy=f"{inertia[1, 1]:.6g}",
+        iyz=f"{inertia[1, 2]:.6g}",
+        izz=f"{inertia[2, 2]:.6g}",
+    )
+    return mass
+
+
+def _add_visual(el: ET.Element, link_name: str, group: VisualGroup, folder: Path) -> list:
+    """Write the group's coloured OBJ and add its <visual>; returns its meta entry [material, rgba]."""
+    fname = f"textured_objs/{link_name}-{group.name}.obj"
+    _write_obj_with_colour(folder / fname, group.mesh(), group.rgba, f"{link_name}-{group.name}")
+    vis = ET.SubElement(el, "visual", name=f"{link_name}-{group.name}")
+    ET.SubElement(vis, "origin", xyz="0 0 0", rpy="0 0 0")
+    ET.SubElement(ET.SubElement(vis, "geometry"), "mesh", filename=fname)
+    mat = ET.SubElement(vis, "material", name=f"{link_name}-{group.name}-{group.material}")
+    ET.SubElement(mat, "color", rgba=_fmt(group.rgba))
+    return [group.material, list(group.rgba)]
+
+
+def _add_joint(robot: ET.Element, j: JointSpec) -> None:
+    """Add the <joint> of ``j`` (origin in the parent link's frame, m; limits in rad or m)."""
+    el = ET.SubElement(robot, "joint", name=j.name, type=j.type)
+    ET.SubElement(el, "origin", xyz=_fmt(j.origin), rpy="0 0 0")
+    ET.SubElement(el, "axis", xyz=_fmt(j.axis))
+    ET.SubElement(el, "parent", link=j.parent)
+    ET.SubElement(el, "child", link=j.child)
+    effort = 200.0 if j.type == "revolute" else 500.0
+    ET.SubElement(el, "limit", lower=_fmt([j.lower]), upper=_fmt([j.upper]), effort=f"{effort:g}", velocity="2")
+    ET.SubElement(el, "dynamics", damping=f"{j.damping:g}", friction=f"{j.friction:g}")
+
+
+def _meta(spec: ObjectSpec, object_id: str, materials: dict, link_masses: dict, generator_info: dict) -> dict:
+    """The meta.json dictionary (handle positions in their link's frame, m)."""
+    return {
         "model_cat": MODEL_CAT[spec.category],
         "anno_id": object_id,
         "front_axis": "+x",
@@ -128,13 +152,11 @@ def write_object(spec: ObjectSpec, folder: Path, object_id: str, generator_info:
             }
             for h in spec.handles
         ],
-        "materials": materials_meta,
+        "materials": materials,
         "link_masses_kg": link_masses,
         "params": _jsonable(spec.params),
         "generator": generator_info,
     }
-    (folder / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
-    return meta
 
 
 def _write_obj_with_colour(path: Path, mesh, rgba, material: str) -> None:

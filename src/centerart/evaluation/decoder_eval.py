@@ -114,11 +114,11 @@ def _physics(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
     import pybullet as pb
 
     from centerart.grasps import executor as ex
-    from centerart.grasps.sim_world import connect, load_object
+    from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
 
     client = connect()
     try:
-        target = load_object(client, obj, q)
+        target = spawn_object_in_pybullet(client, obj, q)
         executor = ex.GraspExecutor(client)
         direction = ex.commanded_direction(obj.joint_type, q, obj.joint_range[1])
         return [bool(executor.execute(p, target, direction).success) for p in poses[:k]]

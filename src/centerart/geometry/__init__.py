@@ -1,4 +1,8 @@
-"""Frame and pose conventions, written once (see :mod:`centerart.geometry.transforms`)."""
+"""Frame, pose, camera and rotation conventions, written once.
+
+:mod:`~centerart.geometry.transforms` (poses), :mod:`~centerart.geometry.camera` (OpenCV cameras, intrinsics,
+projection, renderer camera frames) and :mod:`~centerart.geometry.rotations` (quaternions, axis-angle).
+"""
 
 from centerart.geometry.transforms import (
     apply_transform,

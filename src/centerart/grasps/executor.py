@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from centerart.geometry.rotations import axis_angle_matrix, quat_from_matrix, quat_multiply
 from centerart.geometry.transforms import invert_pose, make_pose
 from centerart.grasps.gripper import (
     FINGER_LENGTH,
@@ -242,7 +243,7 @@ class GraspExecutor:
     Example (world = object canonical frame)::
 
         client = connect()
-        target = load_object(client, obj, q)
+        target = spawn_object_in_pybullet(client, obj, q)
         executor = GraspExecutor(client)
         result = executor.execute(world_T_tcp, target)
     """
@@ -288,8 +289,7 @@ class GraspExecutor:
         """
         import pybullet as pb
 
-        c = self.client
-        pb.restoreState(self.state_id, physicsClientId=c)
+        pb.restoreState(self.state_id, physicsClientId=self.client)
         q_start = target.joint_state()
         if direction is None:
             direction = commanded_direction(target.joint_type, q_start, target.upper)
@@ -299,39 +299,70 @@ class GraspExecutor:
             return GraspResult(success, direction * (q_end - q_start), abort, direction, q_start, q_end, steps)
 
         goal_hand = hand_pose(world_T_tcp)
-        start_hand = goal_hand @ make_pose(translation=[0.0, 0.0, -APPROACH_DISTANCE])
-        gripper = self.gripper
-        gripper.place(start_hand, MAX_OPENING)
-        pb.performCollisionDetection(physicsClientId=c)
-        if any(p[8] < -SPAWN_PENETRATION_TOL for p in pb.getContactPoints(bodyA=gripper.body, physicsClientId=c)):
+        if self._spawn_collides(goal_hand):  # 1. spawn
             return result(False, "collision_at_spawn", 0)
+        steps = self._approach(goal_hand)  # 2. approach
+        reached = self.gripper.world_T_hand()
+        if np.linalg.norm(reached[:3, 3] - goal_hand[:3, 3]) > APPROACH_TOLERANCE:
+            return result(False, "approach_blocked", steps)
+        steps += self._close()  # 3. close
+        if not any(self._fingers_touching(target)):
+            return result(False, "no_contact", steps)
+        steps += self._pull(target, direction, q_start)  # 4. move the part
+        moved = direction * (target.joint_state() - q_start)
+        if moved < success_threshold(target.joint_type):
+            return result(False, "", steps)
+        if not all(self._fingers_touching(target)):
+            return result(False, "lost_grip", steps)
+        return result(True, "", steps)
 
-        # 2. approach along the hand's own z (orientation fixed: one quaternion for the whole approach)
-        steps = 0
+    def _spawn_collides(self, goal_hand: np.ndarray) -> bool:
+        """Place the open hand APPROACH_DISTANCE behind ``goal_hand`` (world frame); whether it penetrates anything
+        by more than SPAWN_PENETRATION_TOL there."""
+        import pybullet as pb
+
+        c = self.client
+        start_hand = goal_hand @ make_pose(translation=[0.0, 0.0, -APPROACH_DISTANCE])
+        self.gripper.place(start_hand, MAX_OPENING)
+        pb.performCollisionDetection(physicsClientId=c)
+        contacts = pb.getContactPoints(bodyA=self.gripper.body, physicsClientId=c)
+        return any(p[8] < -SPAWN_PENETRATION_TOL for p in contacts)
+
+    def _approach(self, goal_hand: np.ndarray) -> int:
+        """Drive the hand along its own z to ``goal_hand`` (world frame), then let it settle; returns the steps."""
+        import pybullet as pb
+
+        c = self.client
+        # Orientation fixed during the approach: one quaternion for all steps.
         n_approach = max(1, int(np.ceil(APPROACH_DISTANCE / APPROACH_SPEED / self.dt)))
         orn = quat_from_matrix(goal_hand[:3, :3])
         z_axis, goal_pos = goal_hand[:3, 2], goal_hand[:3, 3]
         for k in range(1, n_approach + 1):
-            gripper.move_to(goal_pos - z_axis * (APPROACH_DISTANCE * (1 - k / n_approach)), orn)
+            self.gripper.move_to(goal_pos - z_axis * (APPROACH_DISTANCE * (1 - k / n_approach)), orn)
             pb.stepSimulation(physicsClientId=c)
         for _ in range(SETTLE_STEPS):  # let the constraint settle on the goal
             pb.stepSimulation(physicsClientId=c)
-        steps += n_approach + SETTLE_STEPS
-        reached = gripper.world_T_hand()
-        if np.linalg.norm(reached[:3, 3] - goal_hand[:3, 3]) > APPROACH_TOLERANCE:
-            return result(False, "approach_blocked", steps)
+        return n_approach + SETTLE_STEPS
 
-        # 3. close
-        gripper.set_opening(0.0)
+    def _close(self) -> int:
+        """Close both fingers with GRASP_FORCE for CLOSE_STEPS steps; returns the steps."""
+        import pybullet as pb
+
+        self.gripper.set_opening(0.0)
         for _ in range(CLOSE_STEPS):
-            pb.stepSimulation(physicsClientId=c)
-        steps += CLOSE_STEPS
-        touching = self._fingers_touching(target)
-        if not any(touching):
-            return result(False, "no_contact", steps)
+            pb.stepSimulation(physicsClientId=self.client)
+        return CLOSE_STEPS
 
-        # 4. move the part along the (possibly predicted) joint motion
-        grasped_hand = gripper.world_T_hand()
+    def _pull(self, target: GraspTarget, direction: int, q_start: float) -> int:
+        """Move the grasping hand along the (possibly predicted) joint motion of ``target``; returns the steps.
+
+        Revolute: rotate the hand about the hinge line by up to PULL_ANGLE (rad); prismatic: translate it along the
+        axis by up to PULL_DISTANCE (m); the TCP moves at PULL_SPEED (m/s). Stops early once the true joint is
+        clearly past the success threshold.
+        """
+        import pybullet as pb
+
+        grasped_hand = self.gripper.world_T_hand()
         tcp = (grasped_hand @ make_pose(translation=[0.0, 0.0, HAND_TO_TCP]))[:3, 3]
         origin, axis = target.axis_origin, target.axis_direction
         if target.joint_type == "revolute":
@@ -344,28 +375,24 @@ class GraspExecutor:
         n_pull = max(1, int(np.ceil(total / rate / self.dt)))
         needed = success_threshold(target.joint_type)
         hand_pos, hand_orn = grasped_hand[:3, 3], quat_from_matrix(grasped_hand[:3, :3])
+        steps = 0
         for k in range(1, n_pull + 1):
             amount = direction * total * k / n_pull
             if target.joint_type == "revolute":
                 half = amount / 2
                 q_motion = (*(axis * np.sin(half)), np.cos(half))
-                rot = _rotation_matrix(axis, amount)
+                rot = axis_angle_matrix(axis, amount)
                 pos = origin + rot @ (hand_pos - origin)
                 orn = quat_multiply(q_motion, hand_orn)
             else:
                 pos, orn = hand_pos + axis * amount, hand_orn
-            gripper.move_to(pos, orn)
-            pb.stepSimulation(physicsClientId=c)
+            self.gripper.move_to(pos, orn)
+            pb.stepSimulation(physicsClientId=self.client)
             steps += 1
-            # Stop once clearly past the threshold (saves time); the grip is still checked below.
+            # Stop once clearly past the threshold (saves time); the grip is checked by the caller.
             if k % 8 == 0 and direction * (target.joint_state() - q_start) >= 1.25 * needed:
                 break
-        moved = direction * (target.joint_state() - q_start)
-        if moved < needed:
-            return result(False, "", steps)
-        if not all(self._fingers_touching(target)):
-            return result(False, "lost_grip", steps)
-        return result(True, "", steps)
+        return steps
 
     def _fingers_touching(self, target: GraspTarget) -> tuple[bool, bool]:
         import pybullet as pb
@@ -382,47 +409,3 @@ class GraspExecutor:
 def world_T_tcp_from_hand(world_T_hand: np.ndarray) -> np.ndarray:
     """Inverse of :func:`~centerart.grasps.gripper.hand_pose`."""
     return world_T_hand @ invert_pose(make_pose(translation=[0.0, 0.0, -HAND_TO_TCP]))
-
-
-def quat_from_matrix(rot: np.ndarray) -> tuple[float, float, float, float]:
-    """Quaternion (x, y, z, w) of a 3x3 rotation; plain arithmetic, because scipy's per-call overhead dominated
-    the trial time."""
-    m = rot
-    tr = m[0, 0] + m[1, 1] + m[2, 2]
-    if tr > 0:
-        s = 2.0 * np.sqrt(tr + 1.0)
-        return ((m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s)
-    if m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        return (0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s)
-    if m[1, 1] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        return ((m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s)
-    s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-    return ((m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s, (m[1, 0] - m[0, 1]) / s)
-
-
-def quat_multiply(a, b) -> tuple[float, float, float, float]:
-    """Hamilton product a * b of (x, y, z, w) quaternions (rotation b first, then a)."""
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    )
-
-
-def _rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rodrigues' formula for a unit axis."""
-    x, y, z = axis
-    c, s = np.cos(angle), np.sin(angle)
-    C = 1.0 - c
-    return np.array(
-        [
-            [c + x * x * C, x * y * C - z * s, x * z * C + y * s],
-            [y * x * C + z * s, c + y * y * C, y * z * C - x * s],
-            [z * x * C - y * s, z * y * C + x * s, c + z * z * C],
-        ]
-    )

@@ -63,7 +63,8 @@ class GenerateGraspsConfig:
     workers: int | None = None
     """Parallel worker processes (default: all cores)."""
     ray_address: str | None = None
-    """Run on a Ray cluster at this address instead of a local process pool."""
+    """Run on a Ray cluster at this address instead of a local process pool; ``local`` starts a Ray instance on
+    this machine with ``workers`` CPUs."""
 
 
 def state_values(obj: ArticulatedObject, n: int) -> np.ndarray:
@@ -76,14 +77,14 @@ def label_state(obj: ArticulatedObject, k: int, cfg: GenerateGraspsConfig) -> tu
     """Labels and statistics of object ``obj`` at state index ``k`` (see the module docstring)."""
     import pybullet as pb
 
-    from centerart.grasps.sim_world import connect, load_object
+    from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
 
     q = float(state_values(obj, cfg.states)[k])
     started, cpu_started = time.perf_counter(), time.process_time()
     rng = item_rng(cfg.seed, obj.object_id, k)
     client = connect()
     try:
-        target = load_object(client, obj, q)
+        target = spawn_object_in_pybullet(client, obj, q)
         executor = ex.GraspExecutor(client)
         direction = ex.commanded_direction(obj.joint_type, q, obj.joint_range[1])
         sampler = CandidateSampler(obj, q, rng)

@@ -78,7 +78,7 @@ def pose_to_pb(pose: np.ndarray) -> tuple[list[float], list[float]]:
     return pose[:3, 3].tolist(), Rotation.from_matrix(pose[:3, :3]).as_quat().tolist()
 
 
-def load_object(
+def spawn_object_in_pybullet(
     client: int,
     obj: ArticulatedObject,
     q: float,

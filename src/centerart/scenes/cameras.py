@@ -1,7 +1,8 @@
 """Camera intrinsics presets and camera poses sampled on a shell around a point of interest.
 
 Poses are ``world_T_camera`` in the OpenCV convention (x right, y down, z forward). ``K`` uses OpenCV's pixel
-convention (the centre of pixel (u, v) is at integer coordinates (u, v)).
+convention (the centre of pixel (u, v) is at integer coordinates (u, v)); both conventions are written once in
+:mod:`centerart.geometry.camera`.
 """
 
 from __future__ import annotations
@@ -9,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from centerart.geometry.camera import Intrinsics
 
 #: name -> (width, height, fx, fy). Principal point at the image centre ((w - 1) / 2, (h - 1) / 2).
 INTRINSICS_PRESETS: dict[str, tuple[int, int, float, float]] = {
@@ -26,8 +29,8 @@ def intrinsics(preset: str) -> tuple[int, int, np.ndarray]:
     if preset not in INTRINSICS_PRESETS:
         raise ValueError(f"unknown intrinsics preset {preset!r}; choose from {sorted(INTRINSICS_PRESETS)}")
     w, h, fx, fy = INTRINSICS_PRESETS[preset]
-    K = np.array([[fx, 0.0, (w - 1) / 2.0], [0.0, fy, (h - 1) / 2.0], [0.0, 0.0, 1.0]])
-    return w, h, K
+    camera = Intrinsics(w, h, fx, fy, (w - 1) / 2.0, (h - 1) / 2.0)
+    return camera.width, camera.height, camera.K
 
 
 @dataclass

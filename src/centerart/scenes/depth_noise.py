@@ -18,6 +18,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from centerart.geometry.camera import backproject_depth, project
+from centerart.geometry.transforms import apply_transform
+
 SGBM_BLOCK = 7
 
 
@@ -68,17 +71,16 @@ def sgbm_disparity(left: np.ndarray, right: np.ndarray, n_disp: int) -> np.ndarr
 
 
 def register_depth(depth_src: np.ndarray, K: np.ndarray, dst_T_src: np.ndarray) -> np.ndarray:
-    """Re-project a depth map from one camera into another with the same K (nearest pixel, z-buffer)."""
+    """Re-project a depth map (float32 m, 0 = hole) from one camera into another with the same K.
+
+    ``dst_T_src`` maps the source camera's OpenCV frame into the destination's. Each source pixel lands on the
+    nearest destination pixel; where several land on one, the nearest surface wins (z-buffer).
+    """
     h, w = depth_src.shape
-    v, u = np.nonzero(depth_src > 0)
-    z = depth_src[v, u]
-    x = (u - K[0, 2]) * z / K[0, 0]
-    y = (v - K[1, 2]) * z / K[1, 1]
-    pts = np.stack([x, y, z], 1) @ dst_T_src[:3, :3].T + dst_T_src[:3, 3]
-    ok = pts[:, 2] > 1e-3
-    pts = pts[ok]
-    u2 = np.round(pts[:, 0] * K[0, 0] / pts[:, 2] + K[0, 2]).astype(np.int64)
-    v2 = np.round(pts[:, 1] * K[1, 1] / pts[:, 2] + K[1, 2]).astype(np.int64)
+    pts = apply_transform(dst_T_src, backproject_depth(depth_src, K))
+    pts = pts[pts[:, 2] > 1e-3]
+    uv = np.round(project(pts, K)[0]).astype(np.int64)
+    u2, v2 = uv[:, 0], uv[:, 1]
     inside = (u2 >= 0) & (u2 < w) & (v2 >= 0) & (v2 < h)
     out = np.full(h * w, np.inf, np.float32)
     np.minimum.at(out, v2[inside] * w + u2[inside], pts[inside, 2].astype(np.float32))

@@ -215,7 +215,7 @@ def _convert(type_name: str, value):
     return value
 
 
-def load_object(
+def load_object_in_default_frame(
     path: str | Path, target_joint: str | None = None, scale: float | None = None, held_states: dict | None = None
 ):
     """Load an asset for a scene, in the frame that ``world_T_object`` places.
@@ -236,8 +236,8 @@ def load_object(
 
 
 def load_scene_object(spec: ObjectSpec):
-    """The :class:`~centerart.assets.ArticulatedObject` of a scene object (see :func:`load_object`)."""
-    return load_object(spec.path, spec.target_joint, spec.scale, spec.held_states)
+    """The :class:`~centerart.assets.ArticulatedObject` of a scene object (see :func:`load_object_in_default_frame`)."""
+    return load_object_in_default_frame(spec.path, spec.target_joint, spec.scale, spec.held_states)
 
 
 def pose_list(pose: np.ndarray) -> list[list[float]]:

@@ -19,6 +19,7 @@ import numpy as np
 import trimesh
 
 from centerart.assets.articulated_object import ArticulatedObject
+from centerart.geometry.camera import project
 from centerart.geometry.transforms import apply_transform, invert_pose
 from centerart.scenes.description import SceneDescription
 
@@ -37,8 +38,7 @@ def project_silhouette(
     tris = pts[mesh.faces]
     keep = (tris[..., 2] > 0.01).all(1)
     tris = tris[keep]
-    uv = tris[..., :2] / tris[..., 2:3] * np.array([K[0, 0], K[1, 1]]) + np.array([K[0, 2], K[1, 2]])
-    uv = uv + pad
+    uv = project(tris.reshape(-1, 3), K)[0].reshape(-1, 3, 2) + pad
     mask = np.zeros((height + 2 * pad, width + 2 * pad), np.uint8)
     shift = 4  # sub-pixel vertex precision for the rasterisation
     poly = np.round(uv * (1 << shift)).astype(np.int32)

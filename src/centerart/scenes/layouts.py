@@ -31,7 +31,7 @@ from centerart.scenes.description import (
     ObjectSpec,
     SceneDescription,
     StereoSpec,
-    load_object,
+    load_object_in_default_frame,
     pose_list,
 )
 
@@ -230,7 +230,7 @@ class _Placed:
 def _load(entry: AssetEntry, rng) -> tuple[ArticulatedObject, float, dict[str, float]]:
     obj = ArticulatedObject.load(entry.path)
     q, held = sample_states(obj, rng)
-    return load_object(entry.path, obj.target_joint, obj.scale, held), q, held
+    return load_object_in_default_frame(entry.path, obj.target_joint, obj.scale, held), q, held
 
 
 def _translation(x, y, z) -> np.ndarray:
@@ -252,6 +252,41 @@ def _world_swept(p: _Placed) -> np.ndarray:
 
 # ------------------------------------------------------------------ layouts
 def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple[list[_Placed], list[BoxSpec]]:
+    """A kitchen row along the wall (world frame, metres; module docstring rules): objects and static boxes.
+
+    Row order along +y: a tall object (left end), the under-counter objects, a base cabinet where the counter
+    would otherwise be too short, a tall object (right end); the microwave stands on the counter.
+    """
+    micro, use_micro, chosen_under, chosen_tall = _choose_kitchen_entries(entries, rng)
+    mats = room_materials(rng)
+    row: list[_Placed] = []
+    y = _stand_in_row(row, chosen_tall[:1], 0.0, rng)
+    under_start = y
+    y = _stand_in_row(row, chosen_under, y, rng)
+    under_rows = [p for p in row if p.support == "floor" and not p.entry.tall]
+    micro_placed = None
+    if use_micro:
+        entry = micro[int(rng.integers(len(micro)))]
+        obj, q, held = _load(entry, rng)
+        micro_placed = (entry, obj, q, held, swept_bounds(obj, q))
+    micro_width = None if micro_placed is None else micro_placed[4][1, 1] - micro_placed[4][0, 1]
+    cabinet, y = _base_cabinet(micro_width, under_rows, under_start, y, rng)
+    _stand_in_row(row, chosen_tall[1:2], y, rng, gap_after=False)
+    boxes, y0, y1, counter_top = _counter_boxes(under_rows, cabinet, mats, rng)
+    if micro_placed is not None:
+        entry, obj, q, held, swept = micro_placed
+        free = (y1 - y0) - (swept[1, 1] - swept[0, 1])
+        y_left = y0 + 0.01 + rng.uniform(0, max(free - 0.02, 0.0))
+        row.append(_stand(obj, q, held, entry, rng, y_left, counter_top, "counter"))
+    _center_row(row, boxes)
+    boxes.extend(_room(rng, row, boxes, mats))
+    return row, boxes
+
+
+def _choose_kitchen_entries(
+    entries: list[AssetEntry], rng: np.random.Generator
+) -> tuple[list[AssetEntry], bool, list[AssetEntry], list[AssetEntry]]:
+    """(all microwaves, whether the kitchen gets one, the chosen under-counter entries, the chosen tall entries)."""
     micro = [e for e in entries if e.category == "microwave"]
     tall = [e for e in entries if e.tall and e.category != "microwave"]
     under = [e for e in entries if not e.tall and e.category != "microwave"]
@@ -267,49 +302,51 @@ def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple
         n_under = 1 if under else 0
     chosen_under = [under[i] for i in rng.choice(len(under), n_under, replace=True)] if n_under else []
     chosen_tall = [tall[i] for i in rng.choice(len(tall), n_tall, replace=True)] if n_tall else []
-    mats = room_materials(rng)
+    return micro, use_micro, chosen_under, chosen_tall
 
-    row: list[_Placed] = []
-    y = 0.0
-    ends = [chosen_tall[0]] if chosen_tall else []
-    tail = [chosen_tall[1]] if len(chosen_tall) > 1 else []
-    boxes: list[BoxSpec] = []
-    # Row order: tall (left end), under-counter objects, tall (right end); a base cabinet stands in for missing
-    # under-counter objects so the microwave has a counter.
-    for entry in ends:
+
+def _stand_in_row(
+    row: list[_Placed], entries: list[AssetEntry], y: float, rng: np.random.Generator, gap_after: bool = True
+) -> float:
+    """Load each entry and stand it on the floor from ``y`` (m) along +y, appending to ``row``; returns the next y.
+
+    ``gap_after``: leave a random neighbour gap after each object (the row's last object needs none, and drawing
+    it would shift the random stream).
+    """
+    for entry in entries:
         obj, q, held = _load(entry, rng)
         row.append(_stand(obj, q, held, entry, rng, y, 0.0, "floor"))
-        y = _world_swept(row[-1])[1, 1] + rng.uniform(*NEIGHBOUR_GAP_M)
-    under_start = y
-    for entry in chosen_under:
-        obj, q, held = _load(entry, rng)
-        row.append(_stand(obj, q, held, entry, rng, y, 0.0, "floor"))
-        y = _world_swept(row[-1])[1, 1] + rng.uniform(*NEIGHBOUR_GAP_M)
-    under_rows = [p for p in row if p.support == "floor" and not p.entry.tall]
-    # The microwave needs a counter at least as long as its swept width; a plain base cabinet extends the
-    # under-counter segment (or stands in for it) when it is too short.
-    micro_placed = None
-    if use_micro:
-        entry = micro[int(rng.integers(len(micro)))]
-        obj, q, held = _load(entry, rng)
-        micro_placed = (entry, obj, q, held, swept_bounds(obj, q))
-    needed = 0.0 if micro_placed is None else micro_placed[4][1, 1] - micro_placed[4][0, 1] + 0.04
+        y = _world_swept(row[-1])[1, 1] + (rng.uniform(*NEIGHBOUR_GAP_M) if gap_after else 0.0)
+    return y
+
+
+def _base_cabinet(
+    micro_width: float | None, under_rows: list[_Placed], under_start: float, y: float, rng: np.random.Generator
+) -> tuple[tuple[float, float, float, float] | None, float]:
+    """The plain base cabinet (y0, y1, depth, height) in m, or None, and the next free y along the row.
+
+    The microwave (swept width ``micro_width``, None without one) needs a counter at least as long as itself; the
+    cabinet extends the under-counter segment (or stands in for it) when that is too short.
+    """
+    needed = 0.0 if micro_width is None else micro_width + 0.04
     if not under_rows:
         needed = max(needed, rng.uniform(0.6, 0.9))
     span = (max(_world_swept(p)[1, 1] for p in under_rows) - under_start) if under_rows else 0.0
-    cabinet = None
-    if span < needed:
-        c0 = y if under_rows else under_start
-        width = max(needed - span, 0.3)
-        depth, height = rng.uniform(0.55, 0.62), rng.uniform(0.84, 0.88)
-        cabinet = (c0, c0 + width, depth, height)
-        y = c0 + width + rng.uniform(*NEIGHBOUR_GAP_M)
-    for entry in tail:
-        obj, q, held = _load(entry, rng)
-        row.append(_stand(obj, q, held, entry, rng, y, 0.0, "floor"))
-        y = _world_swept(row[-1])[1, 1]
+    if span >= needed:
+        return None, y
+    c0 = y if under_rows else under_start
+    width = max(needed - span, 0.3)
+    depth, height = rng.uniform(0.55, 0.62), rng.uniform(0.84, 0.88)
+    return (c0, c0 + width, depth, height), c0 + width + rng.uniform(*NEIGHBOUR_GAP_M)
 
-    # Counter top over the under-counter objects (or the cabinet), flush with their swept boxes' y extent.
+
+def _counter_boxes(
+    under_rows: list[_Placed], cabinet: tuple | None, mats: dict, rng: np.random.Generator
+) -> tuple[list[BoxSpec], float, float, float]:
+    """Counter top, base cabinet and backsplash boxes; also the counter's y extent (y0, y1) and top height (m).
+
+    The counter spans the under-counter objects (or the cabinet), flush with their swept boxes' y extent.
+    """
     heights = [_world_swept(p)[1, 2] for p in under_rows] + ([cabinet[3]] if cabinet else [])
     # The counter's depth follows the closed fronts: open doors and drawers swing out below it.
     depths = [p.obj.bounds()[1, 0] + p.world_T_object[0, 3] for p in under_rows] + ([cabinet[2]] if cabinet else [])
@@ -321,7 +358,7 @@ def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple
     y0 = min(float(sp[0]) for sp in spans)
     y1 = max(float(sp[1]) for sp in spans)
     counter_top = bottom + thickness
-    boxes.append(
+    boxes = [
         _box(
             "counter",
             "counter",
@@ -329,9 +366,9 @@ def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple
             [front / 2, (y1 - y0) / 2, thickness / 2],
             mats["counter"],
         )
-    )
+    ]
     if cabinet is not None:
-        c0, c1, depth, height = cabinet
+        c0, c1, depth, _height = cabinet
         boxes.append(
             _box(
                 "base_cabinet",
@@ -351,15 +388,7 @@ def sample_kitchen(entries: list[AssetEntry], rng: np.random.Generator) -> tuple
             mats["backsplash"],
         )
     )
-
-    if micro_placed is not None:
-        entry, obj, q, held, swept = micro_placed
-        free = (y1 - y0) - (swept[1, 1] - swept[0, 1])
-        y_left = y0 + 0.01 + rng.uniform(0, max(free - 0.02, 0.0))
-        row.append(_stand(obj, q, held, entry, rng, y_left, counter_top, "counter"))
-    _center_row(row, boxes)
-    boxes.extend(_room(rng, row, boxes, mats))
-    return row, boxes
+    return boxes, y0, y1, counter_top
 
 
 def sample_single(entries: list[AssetEntry], rng: np.random.Generator) -> tuple[list[_Placed], list[BoxSpec]]:

@@ -8,9 +8,10 @@ geometry with box-projected UV coordinates so that procedural textures (wood gra
 at a metric scale; real PartNet-Mobility objects keep their own textured visuals.
 
 Frames: camera poses in the description are OpenCV (x right, y down, z forward); SAPIEN cameras look along +x
-with z up, so ``world_T_sapien = world_T_opencv @ OPENCV_T_SAPIEN``. SAPIEN samples pixel (u, v) at its centre
-(u + 0.5, v + 0.5); the principal point handed to SAPIEN is therefore ``K[:2, 2] + 0.5`` so that rendered images
-follow OpenCV's convention for ``K`` (pixel centres at integer coordinates).
+with z up, so ``world_T_sapien = world_T_opencv @ OPENCV_T_SAPIEN`` (both conventions are written once in
+:mod:`centerart.geometry.camera`). SAPIEN samples pixel (u, v) at its centre (u + 0.5, v + 0.5); the principal
+point handed to SAPIEN is therefore ``K[:2, 2] + 0.5`` so that rendered images follow OpenCV's convention for
+``K`` (pixel centres at integer coordinates).
 """
 
 from __future__ import annotations
@@ -23,11 +24,9 @@ import trimesh
 
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.errors import CenterArtError
+from centerart.geometry.camera import OPENCV_T_SAPIEN, Intrinsics
 from centerart.scenes.description import MaterialSpec, SceneDescription, load_scene_object
 from centerart.scenes.textures import make_texture
-
-#: Columns: SAPIEN camera axes (forward, left, up) written in OpenCV camera coordinates.
-OPENCV_T_SAPIEN = np.array([[0.0, -1.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 
 INSTANCE_BACKGROUND = 0
 
@@ -231,6 +230,7 @@ class SceneRenderer:
                 raise CenterArtError(f"scene {desc.scene_id}: all views must share one image size and K")
         w, h, K = cam0.width, cam0.height, np.asarray(cam0.K, float)
         self.K, self.width, self.height = K, w, h
+        intr = Intrinsics.from_matrix(K, w, h)
         rig = sapien.Entity()
         rig.name = "camera_rig"
 
@@ -240,7 +240,9 @@ class SceneRenderer:
             # The component wants a shader folder path, not a name; "" means the process-wide default.
             cam = sapien.render.RenderCameraComponent(w, h, str(shader_root / shader) if shader else "")
             cam.name = name
-            cam.set_perspective_parameters(cam0.near, cam0.far, K[0, 0], K[1, 1], K[0, 2] + 0.5, K[1, 2] + 0.5, K[0, 1])
+            # SAPIEN samples pixel centres at (u + 0.5, v + 0.5); K follows OpenCV (centres at integers).
+            cx, cy = intr.cx + 0.5, intr.cy + 0.5
+            cam.set_perspective_parameters(cam0.near, cam0.far, intr.fx, intr.fy, cx, cy, intr.skew)
             cam.local_pose = sapien.Pose([0.0, local_y, 0.0])
             rig.add_component(cam)
             return cam

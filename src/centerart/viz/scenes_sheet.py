@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 import tyro
 
+from centerart.geometry.camera import project
 from centerart.viz.contact_sheet import grid, labelled, save_png
 
 PALETTE = np.array(
@@ -57,8 +58,7 @@ def colorize_depth(depth: np.ndarray, lo: float, hi: float) -> np.ndarray:
 def _project(K: np.ndarray, pts: np.ndarray) -> np.ndarray | None:
     if (pts[:, 2] < 0.05).any():
         return None
-    uv = pts[:, :2] / pts[:, 2:3] * np.array([K[0, 0], K[1, 1]]) + np.array([K[0, 2], K[1, 2]])
-    return np.round(uv).astype(int)
+    return np.round(project(pts, K)[0]).astype(int)
 
 
 def draw_labels(rgb: np.ndarray, labels: dict, axis_len: float = 0.2) -> np.ndarray:
