@@ -113,31 +113,40 @@ class Predictor:
         depth = check_inputs(np.asarray(rgb), np.asarray(depth), camera)
         t0 = time.perf_counter()
         encoded = detect_objects(self.encoder.encoder, rgb, depth, camera, self.config.peak_threshold)
-        self.timing = {"encoder_s": time.perf_counter() - t0}
+        self.timing = {"encoder_s": time.perf_counter() - t0, "grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
         self.last_heatmap = encoded.heatmap
         scene_points = backproject_depth(depth, camera.K)
         preds = [self._predict_object(d, depth, camera, scene_points) for d in encoded.detections]
-        self.timing["objects_s"] = time.perf_counter() - t0 - self.timing["encoder_s"]
+        self.timing["total_s"] = time.perf_counter() - t0
         return preds
+
+    def _tick(self, key: str, since: float) -> float:
+        now = time.perf_counter()
+        self.timing[key] += now - since
+        return now
 
     def _predict_object(self, det: Detection, depth, camera: Intrinsics, scene_points) -> ObjectPrediction:
         cfg = self.config
         mesh_cfg = MeshConfig(resolution=cfg.grasp_resolution)
         grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k_grasps * 3, cfg.top_k_grasps))
         code = det.shape_code.astype(np.float32)
+        t = time.perf_counter()
         recon, grasps = predict_shape_and_grasps(
             self.decoder.decoder, code, det.joint_code, self.decoder.bounds, mesh_cfg, grasp_cfg, self.device
         )
+        t = self._tick("grasps_s", t)
         pose, info = det.camera_T_object, {}
         if cfg.refine.icp and det.mask is not None:
             observed = backproject_depth(depth, camera.K, mask=det.mask)
             pose, info = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
+        t = self._tick("refine_s", t)
         grasps_cam = pose @ grasps.poses if len(grasps) else np.zeros((0, 4, 4))
         scores = grasps.scores
         if cfg.collision.enabled and len(grasps_cam):
             keep = collision_free(grasps_cam, scene_points, cfg.collision)
             grasps_cam, scores = grasps_cam[keep], scores[keep]
         grasps_cam, scores = grasps_cam[: cfg.top_k_grasps], scores[: cfg.top_k_grasps]
+        self._tick("filter_s", t)
         axis_point = det.axis_point + (pose[:3, 3] - det.camera_T_object[:3, 3])  # the axis moves with ICP's shift
         return ObjectPrediction(
             score=det.score,
