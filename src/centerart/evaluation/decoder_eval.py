@@ -5,7 +5,7 @@ Groups (from the split stored in the checkpoint):
 - ``train``: training objects at their training states (trained codes);
 - ``heldout_state``: training objects at held-out joint states (trained codes, unseen joint codes);
 - ``heldout_object``: objects without a trained code (held out in training, or any other object in --data);
-  their code is fitted to all their SDF samples with the decoder frozen (``inference/code_fitting.py``).
+  their code is fitted to all their SDF samples with the decoder frozen (``models/code_fitting.py``).
 
 Per (object, state), in the object's canonical frame:
 
@@ -129,11 +129,12 @@ def _physics(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
 def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
     from centerart.assets.articulated_object import ArticulatedObject
     from centerart.grasps.labels import StateLabels
-    from centerart.inference.code_fitting import CodeFitConfig, Observations, fit_code
     from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_shape_and_grasps
     from centerart.inference.reconstruction import MeshConfig
     from centerart.models.checkpoint import load_decoder
-    from centerart.training.decoder_data import DecoderSplit, load_states
+    from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
+    from centerart.sdf.samples import load_states
+    from centerart.training.decoder_data import DecoderSplit
     from centerart.utils.atomic import atomic_write_json
     from centerart.utils.manifest import code_version
 

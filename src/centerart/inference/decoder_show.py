@@ -77,11 +77,11 @@ def show_decoder(cfg: ShowDecoderConfig) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from centerart.inference.code_fitting import CodeFitConfig, Observations, fit_code
     from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_shape_and_grasps
     from centerart.inference.reconstruction import MeshConfig
     from centerart.models.checkpoint import load_decoder
-    from centerart.training.decoder_data import load_states
+    from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
+    from centerart.sdf.samples import load_states
 
     loaded = load_decoder(cfg.checkpoint)
     if cfg.object in loaded.codes:

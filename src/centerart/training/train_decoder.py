@@ -21,7 +21,7 @@ from typing import Literal
 import torch
 
 from centerart.errors import CenterArtError
-from centerart.inference.code_fitting import CodeFitConfig
+from centerart.models.code_fitting import CodeFitConfig
 from centerart.models.decoder import PRESETS, DecoderConfig
 from centerart.models.losses import GraspWeighting, LossConfig
 from centerart.utils.atomic import atomic_write_json
@@ -80,7 +80,8 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
     from torch.utils.data import DataLoader
 
     from centerart.models.checkpoint import save_checkpoint
-    from centerart.training.decoder_data import PointBatchDataset, load_states, make_split, surface_bounds
+    from centerart.sdf.samples import load_states
+    from centerart.training.decoder_data import PointBatchDataset, make_split, surface_bounds
     from centerart.training.decoder_module import DecoderModule
 
     if not Path(cfg.data).is_dir():
