@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-import io
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
-
-from centerart.utils.atomic import atomic_write_bytes
 
 
 def _font(size: int):
@@ -48,10 +45,11 @@ def grid(rows: Sequence[Sequence[np.ndarray]], pad: int = 4, background=(255, 25
 
 
 def save_png(image: np.ndarray, path: Path) -> Path:
-    """Write ``image`` (format from the suffix, PNG by default) through a temporary file and an atomic rename, so
-    a reader never sees half a picture."""
+    """Write ``image`` (format from the suffix, PNG by default) to a temporary sibling and rename it into place,
+    so a reader never sees half a picture."""
     path = Path(path)
-    buf = io.BytesIO()
-    Image.fromarray(image).save(buf, format=Image.registered_extensions().get(path.suffix.lower(), "PNG"))
-    atomic_write_bytes(path, buf.getvalue())
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".tmp-{path.name}")
+    Image.fromarray(image).save(tmp, format=Image.registered_extensions().get(path.suffix.lower(), "PNG"))
+    tmp.replace(path)
     return path
