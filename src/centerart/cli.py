@@ -48,7 +48,7 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "physics-verified grasp labels per (object, joint state)",
         ),
         "show": Command(
-            "centerart.grasps.show:ShowGraspsConfig",
+            "centerart.viz.grasps_sheet:ShowGraspsConfig",
             "centerart.commands:grasps_show",
             "draw stored grasp labels as gripper markers on an object",
         ),
@@ -86,7 +86,7 @@ COMMANDS: dict[str, dict[str, Command]] = {
     },
     "decoder": {
         "show": Command(
-            "centerart.inference.decoder_show:ShowDecoderConfig",
+            "centerart.viz.decoder_sheet:ShowDecoderConfig",
             "centerart.commands:decoder_show",
             "reconstructions with top grasps at several joint states",
         ),

@@ -40,7 +40,7 @@ def grasps_generate(cfg) -> None:
 
 
 def grasps_show(cfg) -> None:
-    from centerart.grasps.show import show_grasps
+    from centerart.viz.grasps_sheet import show_grasps
 
     print(f"wrote {show_grasps(cfg)}")
 
@@ -128,7 +128,7 @@ def encoder_show(cfg) -> None:
 
 
 def decoder_show(cfg) -> None:
-    from centerart.inference.decoder_show import show_decoder
+    from centerart.viz.decoder_sheet import show_decoder
 
     print(f"wrote {show_decoder(cfg)}")
 

@@ -31,10 +31,10 @@ class DemoConfig:
 def run_demo(cfg: DemoConfig) -> None:
     from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
     from centerart.grasps.generate import GenerateGraspsConfig, generate_grasps
-    from centerart.grasps.show import ShowGraspsConfig, show_grasps
-    from centerart.inference.decoder_show import ShowDecoderConfig, show_decoder
     from centerart.scenes.dataset import GenerateScenesConfig, generate_scenes
     from centerart.sdf.generate import GenerateSdfConfig, generate_sdf
+    from centerart.viz.decoder_sheet import ShowDecoderConfig, show_decoder
+    from centerart.viz.grasps_sheet import ShowGraspsConfig, show_grasps
     from centerart.viz.objects_sheet import ShowObjectsConfig, show_objects
     from centerart.viz.scenes_sheet import ShowScenesConfig, show_scenes
 

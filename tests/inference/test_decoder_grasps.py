@@ -8,7 +8,7 @@ from torch import nn
 from centerart.evaluation.decoder_eval import grasp_matches
 from centerart.inference.decoder_grasps import GraspExtractionConfig, extract_grasps, rotation_angle_symmetric
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
-from centerart.models.decoder import DecoderConfig, DecoderOutput, gram_schmidt
+from centerart.models.decoder import DecoderConfig, decode_outputs
 from centerart.training.synthetic import BoxCabinet
 
 BOUNDS = np.array([[-0.2, -0.25, -0.2], [0.55, 0.3, 0.2]])
@@ -42,8 +42,7 @@ class ExactCabinetDecoder(nn.Module):
         nearest = np.linalg.norm(p[:, None] - labels[None, :, :3, 3], axis=-1).argmin(1)
         L = labels[nearest]
         raw = np.concatenate([self.cab.sdf(p, u)[:, None], L[:, :3, 3] - p, L[:, :3, 0], L[:, :3, 1]], 1)
-        r = torch.as_tensor(raw, dtype=torch.float32)
-        return DecoderOutput(sdf=r[:, 0], offset=r[:, 1:4], rotation=gram_schmidt(r[:, 4:7], r[:, 7:10]), raw=r)
+        return decode_outputs(torch.as_tensor(raw, dtype=torch.float32))
 
 
 def _run(dec, u, cfg=None):

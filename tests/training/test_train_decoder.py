@@ -8,7 +8,8 @@ from centerart.errors import CenterArtError
 from centerart.models.checkpoint import load_decoder, load_shape_codes
 from centerart.models.decoder import preset
 from centerart.models.losses import LossConfig, decoder_loss
-from centerart.training.decoder_data import PointBatchDataset, load_states, make_split
+from centerart.sdf.samples import load_states
+from centerart.training.decoder_data import PointBatchDataset, make_split
 from centerart.training.decoder_module import DecoderModule
 from centerart.training.synthetic import write_box_cabinet_dataset
 from centerart.training.train_decoder import TrainDecoderConfig, train_decoder

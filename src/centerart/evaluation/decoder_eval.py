@@ -5,7 +5,7 @@ Groups (from the split stored in the checkpoint):
 - ``train``: training objects at their training states (trained codes);
 - ``heldout_state``: training objects at held-out joint states (trained codes, unseen joint codes);
 - ``heldout_object``: objects without a trained code (held out in training, or any other object in --data);
-  their code is fitted to all their SDF samples with the decoder frozen (``inference/code_fitting.py``).
+  their code is fitted to all their SDF samples with the decoder frozen (``models/code_fitting.py``).
 
 Per (object, state), in the object's canonical frame:
 
@@ -127,26 +127,45 @@ def _physics(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
 
 
 def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
-    from centerart.assets.articulated_object import ArticulatedObject
-    from centerart.grasps.labels import StateLabels
-    from centerart.inference.code_fitting import CodeFitConfig, Observations, fit_code
-    from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_shape_and_grasps
+    """Evaluate a checkpoint per group (see the module doc); writes ``report.json`` and ``report.png`` to
+    ``cfg.out`` and returns the report."""
+    from centerart.inference.decoder_grasps import GraspExtractionConfig
     from centerart.inference.reconstruction import MeshConfig
     from centerart.models.checkpoint import load_decoder
-    from centerart.training.decoder_data import DecoderSplit, load_states
+    from centerart.sdf.samples import load_states
     from centerart.utils.atomic import atomic_write_json
-    from centerart.utils.manifest import code_version
 
     loaded = load_decoder(cfg.checkpoint)
-    split = DecoderSplit.from_dict(loaded.meta["split"]) if loaded.meta.get("split") else None
     states = load_states(cfg.data, 30000, cfg.seed, progress=False)
     by_obj: dict[str, list] = {}
     for s in states:
         by_obj.setdefault(s.object_id, []).append(s)
-    objects = sorted(by_obj)[: cfg.max_objects] if cfg.max_objects else sorted(by_obj)
     mesh_cfg = MeshConfig(resolution=cfg.resolution)
     grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k, cfg.top_k_coverage))
     results: list[StateResult] = []
+    codes: dict[str, np.ndarray] = {}
+    for oid, g, k in tqdm(_jobs(loaded, by_obj, cfg), desc="eval decoder"):
+        obj_folder = Path(cfg.objects) / oid
+        if not obj_folder.is_dir():
+            raise CenterArtError(f"{obj_folder}: object folder missing (needed for the true mesh of {oid})")
+        if oid not in codes:
+            codes[oid] = _object_code(loaded, oid, by_obj[oid], cfg)
+        st = next(s for s in by_obj[oid] if s.state_index == k)
+        results.append(_evaluate_state(loaded, codes[oid], obj_folder, st, g, cfg, mesh_cfg, grasp_cfg))
+    report = _report(cfg, loaded, results)
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_json(out / "report.json", report)
+    _plots(results, out)
+    return report
+
+
+def _jobs(loaded, by_obj: dict[str, list], cfg: EvalDecoderConfig) -> list[tuple[str, str, int]]:
+    """(object id, group, state index) to evaluate: at most ``states_per_object`` per (object, group)."""
+    from centerart.training.decoder_data import DecoderSplit
+
+    split = DecoderSplit.from_dict(loaded.meta["split"]) if loaded.meta.get("split") else None
+    objects = sorted(by_obj)[: cfg.max_objects] if cfg.max_objects else sorted(by_obj)
     jobs = []
     for oid in objects:
         trained = oid in loaded.codes
@@ -161,48 +180,62 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
             groups.setdefault(g, []).append(s.state_index)
         for g, idx in groups.items():
             jobs.extend((oid, g, k) for k in _select(sorted(idx), cfg.states_per_object))
-    codes: dict[str, np.ndarray] = {}
-    for oid, g, k in tqdm(jobs, desc="eval decoder"):
-        obj_folder = Path(cfg.objects) / oid
-        if not obj_folder.is_dir():
-            raise CenterArtError(f"{obj_folder}: object folder missing (needed for the true mesh of {oid})")
-        if oid not in codes:
-            if oid in loaded.codes:
-                codes[oid] = loaded.code(oid)
-            else:
-                obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in by_obj[oid]])
-                codes[oid] = fit_code(
-                    loaded.decoder, obs, CodeFitConfig(steps=cfg.code_fit_steps, points_per_step=4096, seed=cfg.seed)
-                )[0]
-        st = next(s for s in by_obj[oid] if s.state_index == k)
-        obj = ArticulatedObject.load(obj_folder)
-        q = obj.denormalize(st.joint)
-        t0 = time.perf_counter()
-        recon, grasps = predict_shape_and_grasps(
-            loaded.decoder, codes[oid], st.joint, loaded.bounds, mesh_cfg, grasp_cfg
-        )
-        seconds = time.perf_counter() - t0
-        cd, fs = chamfer_fscore(recon.mesh, obj.watertight_mesh(q), seed=cfg.seed)
-        r = StateResult(oid, k, g, st.joint, cd, fs, seconds, len(grasps))
-        r.extra["evaluated_points"] = recon.stats["evaluated_points"]
-        if cfg.grasps is not None:
-            from centerart.grasps.labels import state_path
+    return jobs
 
-            lp = state_path(cfg.grasps, oid, k)
-            if lp.is_file():
-                lab = StateLabels.load(lp)
-                if lab.count:
-                    topk = grasps.poses[: cfg.top_k]
-                    m = grasp_matches(grasps.poses, lab.poses.astype(np.float64))
-                    r.precision_at_k = float(m[: cfg.top_k].any(1).sum() / cfg.top_k) if len(topk) else 0.0
-                    r.coverage = float(m.any(0).mean()) if len(m) else 0.0
-                    r.extra["labels"] = lab.count
-        if cfg.physics:
-            ok = _physics(obj, q, grasps.poses, 5)
-            ok += [False] * (5 - len(ok))
-            r.physics_top1, r.physics_top5, r.physics_any5 = float(ok[0]), float(np.mean(ok)), float(any(ok))
-        results.append(r)
 
+def _object_code(loaded, oid: str, states: list, cfg: EvalDecoderConfig) -> np.ndarray:
+    """The trained shape code, or one fitted to all the object's SDF samples with the decoder frozen."""
+    from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
+
+    if oid in loaded.codes:
+        return loaded.code(oid)
+    obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
+    code, _, _ = fit_code(
+        loaded.decoder, obs, CodeFitConfig(steps=cfg.code_fit_steps, points_per_step=4096, seed=cfg.seed)
+    )
+    return code
+
+
+def _evaluate_state(loaded, code, obj_folder: Path, st, group: str, cfg, mesh_cfg, grasp_cfg) -> StateResult:
+    """Shape, grasp-label and physics metrics of one (object, state) (see the module doc)."""
+    from centerart.assets.articulated_object import ArticulatedObject
+    from centerart.inference.decoder_grasps import predict_shape_and_grasps
+
+    obj = ArticulatedObject.load(obj_folder)
+    q = obj.denormalize(st.joint)
+    t0 = time.perf_counter()
+    recon, grasps = predict_shape_and_grasps(loaded.decoder, code, st.joint, loaded.bounds, mesh_cfg, grasp_cfg)
+    seconds = time.perf_counter() - t0
+    cd, fs = chamfer_fscore(recon.mesh, obj.watertight_mesh(q), seed=cfg.seed)
+    r = StateResult(st.object_id, st.state_index, group, st.joint, cd, fs, seconds, len(grasps))
+    r.extra["evaluated_points"] = recon.stats["evaluated_points"]
+    if cfg.grasps is not None:
+        _label_metrics(r, grasps.poses, cfg)
+    if cfg.physics:
+        ok = _physics(obj, q, grasps.poses, 5)
+        ok += [False] * (5 - len(ok))
+        r.physics_top1, r.physics_top5, r.physics_any5 = float(ok[0]), float(np.mean(ok)), float(any(ok))
+    return r
+
+
+def _label_metrics(r: StateResult, poses: np.ndarray, cfg: EvalDecoderConfig) -> None:
+    """Precision@k and coverage of ranked TCP poses (object frame) against the state's labels, when it has any."""
+    from centerart.grasps.labels import StateLabels, state_path
+
+    lp = state_path(cfg.grasps, r.object_id, r.state_index)
+    if not lp.is_file():
+        return
+    lab = StateLabels.load(lp)
+    if lab.count:
+        topk = poses[: cfg.top_k]
+        m = grasp_matches(poses, lab.poses.astype(np.float64))
+        r.precision_at_k = float(m[: cfg.top_k].any(1).sum() / cfg.top_k) if len(topk) else 0.0
+        r.coverage = float(m.any(0).mean()) if len(m) else 0.0
+        r.extra["labels"] = lab.count
+
+
+def _summary(results: list[StateResult]) -> dict:
+    """Per group: counts, and the mean (and the Chamfer median) of every metric over its states."""
     summary = {}
     for g in GROUPS:
         rs = [r for r in results if r.group == g]
@@ -230,7 +263,13 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
                 if key == "chamfer_mm":
                     row["chamfer_mm_median"] = float(np.median(vals))
         summary[g] = row
-    report = {
+    return summary
+
+
+def _report(cfg: EvalDecoderConfig, loaded, results: list[StateResult]) -> dict:
+    from centerart.utils.manifest import code_version
+
+    return {
         "checkpoint": str(loaded.path),
         "config": {k: str(v) if isinstance(v, Path) else v for k, v in asdict(cfg).items()},
         "thresholds": {
@@ -240,15 +279,10 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
             "grasp_match_angle_deg": GRASP_MATCH_ANGLE_DEG,
             "top_k": cfg.top_k,
         },
-        "summary": summary,
+        "summary": _summary(results),
         "states": [asdict(r) for r in results],
         "code_version": code_version(),
     }
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_json(out / "report.json", report)
-    _plots(results, out)
-    return report
 
 
 def _plots(results: list[StateResult], out: Path) -> None:

@@ -26,8 +26,8 @@ import torch
 from scipy.spatial import cKDTree
 
 from centerart.grasps.gripper import FLIP_Z
-from centerart.inference.reconstruction import Reconstruction, decoder_outputs
-from centerart.models.decoder import SGDFDecoder
+from centerart.inference.reconstruction import Reconstruction
+from centerart.models.decoder import SGDFDecoder, decode_outputs
 
 
 @dataclass(frozen=True)
@@ -82,7 +82,7 @@ def extract_grasps(
     """Ranked grasps on the moving part at normalized joint code ``joint`` (see module doc)."""
     if recon.raw is None or len(recon.points) == 0:
         return _empty()
-    out = decoder_outputs(recon.raw)
+    out = decode_outputs(recon.raw)
     offset = out.offset.numpy()
     off_norm = np.linalg.norm(offset, axis=1)
     keep = (np.abs(recon.sdf) < cfg.surface_band) & (off_norm < cfg.max_offset)

@@ -35,10 +35,10 @@ import torch.nn.functional as F
 import trimesh
 from scipy import ndimage
 
-from centerart.models.decoder import DecoderOutput, SGDFDecoder
+from centerart.models.decoder import OUT_DIM, SGDFDecoder
 
 FieldFn = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray | None]]
-"""points (N, 3) -> (sdf (N,), raw decoder outputs (N, 10) or None)."""
+"""points (N, 3) -> (sdf (N,), raw decoder outputs (N, OUT_DIM) or None; ``models.decoder.decode_outputs``)."""
 
 
 @dataclass(frozen=True)
@@ -84,7 +84,7 @@ class Reconstruction:
     mesh: trimesh.Trimesh
     points: np.ndarray  # (M, 3) final-level points with network values (evaluated there or reused)
     sdf: np.ndarray  # (M,)
-    raw: np.ndarray | None  # (M, 10) decoder outputs there (None for analytic fields)
+    raw: np.ndarray | None  # (M, OUT_DIM) raw decoder outputs there (decode_outputs; None for analytic fields)
     stats: dict = field(default_factory=dict)
 
 
@@ -103,7 +103,7 @@ def decoder_field(
                 sdf.append(out.sdf.cpu().numpy())
                 raw.append(out.raw.cpu().numpy())
         if not sdf:
-            return np.zeros(0, np.float32), np.zeros((0, 10), np.float32)
+            return np.zeros(0, np.float32), np.zeros((0, OUT_DIM), np.float32)
         return np.concatenate(sdf), np.concatenate(raw)
 
     return fn
@@ -254,14 +254,6 @@ def _marching_cubes(values: np.ndarray, lo: np.ndarray, h: float) -> trimesh.Tri
     # skimage's default "descent" winding gives outward normals (positive volume) for an SDF positive outside.
     verts, faces, _, _ = marching_cubes(values, level=0.0, spacing=(h, h, h), gradient_direction="descent")
     return trimesh.Trimesh(verts + lo, faces, process=False)
-
-
-def decoder_outputs(raw: np.ndarray) -> DecoderOutput:
-    """Decode raw (N, 10) outputs (as returned in :class:`Reconstruction`) into sdf/offset/rotation tensors."""
-    from centerart.models.decoder import gram_schmidt
-
-    r = torch.as_tensor(raw)
-    return DecoderOutput(sdf=r[:, 0], offset=r[:, 1:4], rotation=gram_schmidt(r[:, 4:7], r[:, 7:10]), raw=r)
 
 
 def object_bounds(field_fn: FieldFn, bounds: np.ndarray, resolution: int = 32, margin_cells: float = 1.5) -> np.ndarray:

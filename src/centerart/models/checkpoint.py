@@ -43,7 +43,7 @@ class LoadedDecoder:
             raise CenterArtError(
                 f"{self.path}: object {object_id!r} has no trained shape code "
                 f"(known: {', '.join(sorted(self.codes)[:8])}{', ...' if len(self.codes) > 8 else ''}); "
-                "fit one with centerart.inference.code_fitting"
+                "fit one with centerart.models.code_fitting"
             )
         return self.codes[object_id]
 

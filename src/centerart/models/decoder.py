@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, replace
 
+import numpy as np
 import torch
 from torch import nn
 
@@ -82,10 +83,16 @@ def preset(name: str, **overrides) -> DecoderConfig:
 
 @dataclass
 class DecoderOutput:
+    """The decoder's outputs for B query points, object canonical frame, metres (see the module doc)."""
+
     sdf: torch.Tensor
+    """(B,) signed distance, positive outside."""
     offset: torch.Tensor
+    """(B, 3) grasp TCP position minus the query point."""
     rotation: torch.Tensor
+    """(B, 3, 3) grasp TCP orientation (columns x, y, z)."""
     raw: torch.Tensor = field(repr=False)
+    """(B, OUT_DIM) the head's outputs these were decoded from (kept to store and decode again)."""
 
     def grasp_position(self, xyz: torch.Tensor) -> torch.Tensor:
         return xyz + self.offset
@@ -106,6 +113,21 @@ def gram_schmidt(a: torch.Tensor, b: torch.Tensor, eps: float = 1e-8) -> torch.T
     y = b / b.norm(dim=-1, keepdim=True).clamp_min(eps)
     z = torch.cross(x, y, dim=-1)
     return torch.stack([x, y, z], dim=-1)
+
+
+def decode_outputs(raw: torch.Tensor | np.ndarray) -> DecoderOutput:
+    """Typed outputs from raw head outputs (..., OUT_DIM) laid out [sdf | offset (3) | rotation vectors a, b (3 + 3)].
+
+    The one place that knows the layout: the forward pass and everything that stores raw outputs (e.g. the
+    reconstruction's final-level points) decode through it.
+    """
+    raw = torch.as_tensor(raw)
+    return DecoderOutput(
+        sdf=raw[..., 0],
+        offset=raw[..., 1:4],
+        rotation=gram_schmidt(raw[..., 4:7], raw[..., 7:10]),
+        raw=raw,
+    )
 
 
 class SGDFDecoder(nn.Module):
@@ -150,13 +172,7 @@ class SGDFDecoder(nn.Module):
             if i in c.skip_layers:
                 parts.extend([code, joint, xyz])
             h = self.dropout(torch.relu(lin(torch.cat(parts, -1))))
-        raw = self.head(h)
-        return DecoderOutput(
-            sdf=raw[..., 0],
-            offset=raw[..., 1:4],
-            rotation=gram_schmidt(raw[..., 4:7], raw[..., 7:10]),
-            raw=raw,
-        )
+        return decode_outputs(self.head(h))
 
     def sdf_only(self, code: torch.Tensor, joint: torch.Tensor, xyz: torch.Tensor) -> torch.Tensor:
         return self.forward(code, joint, xyz).sdf

@@ -1,4 +1,7 @@
-"""Decoder training data: SDF sample files in memory, the validation split, and per-item point subsampling.
+"""Decoder training data: the validation split and per-item point draws over SDF states in memory.
+
+The states themselves (one object at one joint state, points subsampled) are loaded by
+:func:`centerart.sdf.samples.load_states`, which inference and evaluation use too.
 
 Split (deterministic given the seed):
 
@@ -12,56 +15,13 @@ from __future__ import annotations
 
 from collections import defaultdict
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
 import numpy as np
 import torch
 from torch.utils.data import Dataset
-from tqdm import tqdm
 
-from centerart.errors import CenterArtError
-from centerart.sdf.samples import SdfSamples, list_sample_files
+from centerart.sdf.samples import StateData
 from centerart.utils.seeding import item_rng
-
-
-@dataclass
-class StateData:
-    """One (object, joint state) with its points subsampled to at most ``max_points`` (object frame, m)."""
-
-    object_id: str
-    state_index: int
-    joint: float  # normalized joint state in [0, 1]
-    points: np.ndarray  # (N, 3) float32
-    sdf: np.ndarray  # (N,)
-    grasp_points: np.ndarray  # (N, 5, 3)
-    grasp_distance: np.ndarray  # (N,)
-
-
-def load_states(folder: Path, max_points: int | None = None, seed: int = 0, progress: bool = True) -> list[StateData]:
-    """Every SDF sample file under ``folder``; each keeps a seeded random subset of ``max_points`` points."""
-    states = []
-    for path in tqdm(list_sample_files(folder), desc="load sdf samples", disable=not progress):
-        s = SdfSamples.load(path)
-        n = len(s.points)
-        if s.sdf.shape != (n,) or s.grasp_points.shape != (n, 5, 3) or s.grasp_distance.shape != (n,):
-            raise CenterArtError(f"{path}: inconsistent array shapes in SDF sample file")
-        if not np.isfinite(s.points).all() or not np.isfinite(s.sdf).all():
-            raise CenterArtError(f"{path}: non-finite points or SDF values")
-        idx = np.arange(n)
-        if max_points is not None and n > max_points:
-            idx = np.sort(item_rng(seed, "subsample", s.object_id, s.state_index).choice(n, max_points, replace=False))
-        states.append(
-            StateData(
-                object_id=s.object_id,
-                state_index=s.state_index,
-                joint=float(s.q_normalized),
-                points=np.ascontiguousarray(s.points[idx], np.float32),
-                sdf=np.ascontiguousarray(s.sdf[idx], np.float32),
-                grasp_points=np.ascontiguousarray(s.grasp_points[idx], np.float32),
-                grasp_distance=np.ascontiguousarray(s.grasp_distance[idx], np.float32),
-            )
-        )
-    return states
 
 
 @dataclass

@@ -4,7 +4,7 @@ Validation reports, separately:
 
 - ``val_state/*``: training objects at held-out joint states, with their trained codes;
 - ``val_object/*``: held-out objects, whose codes are fitted at validation time with the decoder frozen
-  (:func:`centerart.inference.code_fitting.fit_code`, fewer steps than at test time to keep epochs short).
+  (:func:`centerart.models.code_fitting.fit_code`, fewer steps than at test time to keep epochs short).
 
 Metrics: ``sdf`` = clamped L1 (m), ``grasp`` = weighted symmetric control-point error (m), ``sdf_near`` =
 unclamped L1 at points with |sdf| < 1 cm (the part that shapes the mesh), ``grasp_near`` = control-point error at
@@ -21,7 +21,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from centerart.inference.code_fitting import CodeFitConfig, Observations, fit_code
+from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
 from centerart.models.decoder import DecoderConfig, SGDFDecoder
 from centerart.models.losses import (
     LossConfig,
@@ -29,7 +29,7 @@ from centerart.models.losses import (
     decoder_loss,
     symmetric_control_point_error,
 )
-from centerart.training.decoder_data import StateData
+from centerart.sdf.samples import StateData
 
 
 class DecoderModule(L.LightningModule):

@@ -16,15 +16,20 @@ import json
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
+import numpy as np
 import torch
 
 from centerart.errors import CenterArtError
-from centerart.inference.code_fitting import CodeFitConfig
+from centerart.models.code_fitting import CodeFitConfig
 from centerart.models.decoder import PRESETS, DecoderConfig
 from centerart.models.losses import GraspWeighting, LossConfig
 from centerart.utils.atomic import atomic_write_json
+
+if TYPE_CHECKING:
+    from centerart.sdf.samples import StateData
+    from centerart.training.decoder_data import DecoderSplit
 
 
 @dataclass
@@ -73,14 +78,22 @@ class TrainDecoderConfig:
         return LossConfig(grasp_weighting=self.grasp_weighting, sdf_weight=self.sdf_weight)
 
 
-def train_decoder(cfg: TrainDecoderConfig) -> dict:
-    import lightning as L
-    from lightning.pytorch.callbacks import ModelCheckpoint, TQDMProgressBar
-    from lightning.pytorch.loggers import CSVLogger, TensorBoardLogger
-    from torch.utils.data import DataLoader
+@dataclass
+class _Data:
+    """The loaded SDF states by role in the split, and what the checkpoint needs to know about them."""
 
-    from centerart.models.checkpoint import save_checkpoint
-    from centerart.training.decoder_data import PointBatchDataset, load_states, make_split, surface_bounds
+    split: DecoderSplit
+    train: list[StateData]
+    heldout_states: list[StateData]
+    heldout_objects: list[StateData]
+    code_index: dict[str, int]
+    bounds: np.ndarray  # (2, 3) box around every state's surface, object frame, m
+
+
+def train_decoder(cfg: TrainDecoderConfig) -> dict:
+    """Train on ``cfg.data``, export ``decoder.pt`` and return {checkpoint, metrics, split} (see the module doc)."""
+    import lightning as L
+
     from centerart.training.decoder_module import DecoderModule
 
     if not Path(cfg.data).is_dir():
@@ -91,50 +104,91 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     L.seed_everything(cfg.seed, workers=True, verbose=False)
 
-    states = load_states(cfg.data, cfg.max_points_per_state, cfg.seed, progress=cfg.progress)
-    split = make_split(states, cfg.seed, cfg.heldout_object_fraction, cfg.heldout_states_per_object)
-    roles = {(s.object_id, s.state_index): split.role(s.object_id, s.state_index) for s in states}
-    train_states = [s for s in states if roles[(s.object_id, s.state_index)] == "train"]
-    val_states = [s for s in states if roles[(s.object_id, s.state_index)] == "heldout_state"]
-    obj_states = [s for s in states if roles[(s.object_id, s.state_index)] == "heldout_object"]
-    if not train_states:
-        raise CenterArtError(f"{cfg.data}: no training states left after the validation split")
-    code_index = {o: i for i, o in enumerate(split.train_objects)}
-    bounds = surface_bounds(states)
-
+    data = _load_data(cfg)
     dcfg = cfg.decoder_config()
     lcfg = cfg.loss_config()
     atomic_write_json(out / "config.json", {**asdict(cfg), "decoder": dcfg.to_dict(), "loss": asdict(lcfg)})
-    atomic_write_json(out / "split.json", split.to_dict())
+    atomic_write_json(out / "split.json", data.split.to_dict())
 
     module = DecoderModule(
         dcfg,
         lcfg,
-        split.train_objects,
+        data.split.train_objects,
         cfg.lr_decoder,
         cfg.lr_codes,
         cfg.epochs,
-        heldout_object_states=obj_states,
+        heldout_object_states=data.heldout_objects,
         code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, seed=cfg.seed),
     )
+    train_loader, val_loader = _loaders(cfg, data)
+    trainer = _trainer(cfg, out)
+    last = out / "lightning" / "last.ckpt"
+    t0 = time.perf_counter()
+    trainer.fit(
+        module,
+        train_loader,
+        val_loader,
+        ckpt_path=str(last) if cfg.resume and last.is_file() else None,
+    )
+    metrics = _final_metrics(cfg, trainer, module, val_loader, data, time.perf_counter() - t0)
+    return _export(cfg, out, module, data, lcfg, metrics)
+
+
+def _load_data(cfg: TrainDecoderConfig) -> _Data:
+    """Load every state (points subsampled) and split them into training, held-out states and held-out objects."""
+    from centerart.sdf.samples import load_states
+    from centerart.training.decoder_data import make_split, surface_bounds
+
+    states = load_states(cfg.data, cfg.max_points_per_state, cfg.seed, progress=cfg.progress)
+    split = make_split(states, cfg.seed, cfg.heldout_object_fraction, cfg.heldout_states_per_object)
+    roles = {(s.object_id, s.state_index): split.role(s.object_id, s.state_index) for s in states}
+    by_role = {r: [s for s in states if roles[(s.object_id, s.state_index)] == r] for r in set(roles.values())}
+    if not by_role.get("train"):
+        raise CenterArtError(f"{cfg.data}: no training states left after the validation split")
+    return _Data(
+        split,
+        by_role["train"],
+        by_role.get("heldout_state", []),
+        by_role.get("heldout_object", []),
+        {o: i for i, o in enumerate(split.train_objects)},
+        surface_bounds(states),
+    )
+
+
+def _loaders(cfg: TrainDecoderConfig, data: _Data):
+    """(training loader: shuffled with a seeded generator, validation loader over held-out states or None)."""
+    from torch.utils.data import DataLoader
+
+    from centerart.training.decoder_data import PointBatchDataset
+
     gen = torch.Generator().manual_seed(cfg.seed)
     train_loader = DataLoader(
-        PointBatchDataset(train_states, code_index, cfg.points_per_item, cfg.min_items_per_epoch),
+        PointBatchDataset(data.train, data.code_index, cfg.points_per_item, cfg.min_items_per_epoch),
         batch_size=cfg.batch_items,
         shuffle=True,
         generator=gen,
         drop_last=True,
     )
     val_loader = (
-        DataLoader(PointBatchDataset(val_states, code_index, cfg.points_per_item), batch_size=cfg.batch_items)
-        if val_states
+        DataLoader(
+            PointBatchDataset(data.heldout_states, data.code_index, cfg.points_per_item), batch_size=cfg.batch_items
+        )
+        if data.heldout_states
         else None
     )
+    return train_loader, val_loader
+
+
+def _trainer(cfg: TrainDecoderConfig, out: Path):
+    import lightning as L
+    from lightning.pytorch.callbacks import ModelCheckpoint, TQDMProgressBar
+    from lightning.pytorch.loggers import CSVLogger, TensorBoardLogger
+
     loggers = [CSVLogger(out / "logs", name="csv"), TensorBoardLogger(out / "logs", name="tensorboard")]
     ckpt_cb = ModelCheckpoint(
         dirpath=out / "lightning", save_last=True, save_top_k=1, every_n_epochs=cfg.val_every
     )  # no monitor: keeps the newest epoch checkpoint; last.ckpt is what a rerun resumes from
-    trainer = L.Trainer(
+    return L.Trainer(
         max_epochs=cfg.epochs,
         accelerator=cfg.accelerator,
         devices=1,
@@ -148,35 +202,37 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
         enable_model_summary=False,
         deterministic=False,
     )
-    last = out / "lightning" / "last.ckpt"
-    t0 = time.perf_counter()
-    trainer.fit(
-        module,
-        train_loader,
-        val_loader,
-        ckpt_path=str(last) if cfg.resume and last.is_file() else None,
-    )
-    seconds = time.perf_counter() - t0
+
+
+def _final_metrics(cfg: TrainDecoderConfig, trainer, module, val_loader, data: _Data, seconds: float) -> dict:
+    """The trainer's last metrics, validation redone with the final weights, and training time and throughput."""
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
-    if val_states:
+    if data.heldout_states:
         # Final numbers with the final weights (the last in-loop validation may be up to val_every epochs old).
         trainer.validate(module, val_loader, verbose=False)
         metrics.update({k: float(v) for k, v in trainer.callback_metrics.items() if k.startswith("val")})
-    elif obj_states:
+    elif data.heldout_objects:
         metrics.update({f"val_object/{k}": v for k, v in module.heldout_object_metrics().items()})
     points_seen = trainer.global_step * cfg.batch_items * cfg.points_per_item
     metrics["train_seconds"] = seconds
     metrics["train_points_per_second"] = points_seen / max(seconds, 1e-9)
+    return metrics
+
+
+def _export(cfg: TrainDecoderConfig, out: Path, module, data: _Data, lcfg: LossConfig, metrics: dict) -> dict:
+    """Write ``decoder.pt`` (CPU weights, codes, bounds, split, config, metrics) and ``metrics.json``."""
+    from centerart.models.checkpoint import save_checkpoint
+
     module.decoder.cpu()
     path = save_checkpoint(
         out / "decoder.pt",
         module.decoder,
-        split.train_objects,
+        data.split.train_objects,
         module.code_array(),
-        bounds,
-        split.to_dict(),
+        data.bounds,
+        data.split.to_dict(),
         json.loads(json.dumps({**asdict(cfg), "loss": asdict(lcfg)}, default=str)),
         metrics,
     )
     atomic_write_json(out / "metrics.json", metrics)
-    return {"checkpoint": path, "metrics": metrics, "split": split}
+    return {"checkpoint": path, "metrics": metrics, "split": data.split}

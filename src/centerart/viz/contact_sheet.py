@@ -25,6 +25,13 @@ def labelled(image: np.ndarray, text: str, size: int = 12) -> np.ndarray:
     return np.asarray(img)
 
 
+def titled(image: np.ndarray, text: str, size: int = 14) -> np.ndarray:
+    """Image with a white title bar added above it (the image grows by the bar's height)."""
+    bar = Image.new("RGB", (image.shape[1], size + 10), (255, 255, 255))
+    ImageDraw.Draw(bar).text((6, 4), text, fill=(20, 20, 20), font=_font(size))
+    return np.concatenate([np.asarray(bar), image[..., :3]], axis=0)
+
+
 def grid(rows: Sequence[Sequence[np.ndarray]], pad: int = 4, background=(255, 255, 255)) -> np.ndarray:
     """Tile rows of equally sized images into one image."""
     h, w = rows[0][0].shape[:2]
@@ -38,7 +45,11 @@ def grid(rows: Sequence[Sequence[np.ndarray]], pad: int = 4, background=(255, 25
 
 
 def save_png(image: np.ndarray, path: Path) -> Path:
+    """Write ``image`` (format from the suffix, PNG by default) to a temporary sibling and rename it into place,
+    so a reader never sees half a picture."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(image).save(path)
+    tmp = path.with_name(f".tmp-{path.name}")
+    Image.fromarray(image).save(tmp, format=Image.registered_extensions().get(path.suffix.lower(), "PNG"))
+    tmp.replace(path)
     return path

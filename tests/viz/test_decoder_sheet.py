@@ -2,15 +2,19 @@ import numpy as np
 from PIL import Image
 
 from centerart.cli import main
-from centerart.inference.decoder_show import gripper_segments
+from centerart.viz.object_renderer import marker_corners
 
 
-def test_gripper_wireframe_follows_pose():
+def test_gripper_marker_follows_pose():
+    # The reconstruction's grippers are the label sheet's markers now (stem, palm bar, two fingers) instead of a
+    # wireframe; the same fact is checked on them: the right finger sits +y half the opening from the TCP.
     pose = np.eye(4)
     pose[:3, 3] = [1.0, 2.0, 3.0]
-    segs = gripper_segments(pose)
-    assert segs.shape == (4, 2, 3)
-    assert np.allclose(segs[3, 1], [1.0, 2.04, 3.0])  # right pad centre: +y half opening from the TCP
+    corners = marker_corners(pose[None])
+    assert corners.shape == (1, 4, 8, 3)
+    right_finger = corners[0, 3]
+    assert np.allclose(right_finger.mean(0)[:2], [1.0, 2.04])  # right pad centre: +y half opening from the TCP
+    assert right_finger[:, 2].min() < 3.0 < right_finger[:, 2].max()  # the finger reaches past the TCP
 
 
 def test_decoder_show_cli_writes_picture(tmp_path):

@@ -4,7 +4,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from centerart.inference.code_fitting import CodeFitConfig, Observations, fit_code
+from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
 from centerart.models.decoder import DecoderConfig, DecoderOutput
 
 
