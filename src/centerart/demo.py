@@ -1,4 +1,8 @@
-"""``centerart demo``: the main job on its built-in default, end to end on a CPU in about a minute.
+"""``centerart demo``: the main job on its built-in default, end to end on a CPU in a few minutes.
+
+The main job: generate one object of every category with a seed no model was trained on, render a kitchen of
+them with realistic (stereo) depth, predict with the shipped weights (``centerart predict``: overlay, 3-D scene,
+predictions, meshes) and compare the predictions with the ground truth. Then a tour of the stages:
 
 1. generate two checked objects of every category and render them closed, half-open and open;
 2. label grasps on one oven in physics and draw them;
@@ -14,6 +18,8 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
+MATCH_DISTANCE_M = 0.10  # a prediction matches a labelled object when their centres are this close (m)
+
 
 @dataclass
 class DemoConfig:
@@ -26,9 +32,108 @@ class DemoConfig:
     seed: int = 0
     workers: int | None = None
     """Parallel worker processes (default: all cores)."""
+    unseen_seed: int = 1000
+    """Seed of the objects the prediction step renders (the shipped models were trained on seed-0 objects)."""
+    stages: bool = True
+    """Also run the tour of the stages (objects, grasp labels, SDF and decoder, scene pictures)."""
 
 
 def run_demo(cfg: DemoConfig) -> None:
+    out = Path(cfg.out)
+    report = predict_unseen_kitchen(cfg, out)
+    pictures = stage_tour(cfg, out) if cfg.stages else []
+    print("prediction (open these first):")
+    for name in ("overlay.png", "scene.glb", "predictions.json", "comparison.json"):
+        print(f"  {out / 'predict' / name}")
+    print(f"  3-D viewer: centerart view {out / 'predict'}")
+    if pictures:
+        print("stage pictures:\n" + "\n".join(f"  {p}" for p in pictures))
+    found = sum(r["found"] for r in report["objects"])
+    print(f"found {found} of {len(report['objects'])} objects (see the table above)")
+
+
+def predict_unseen_kitchen(cfg: DemoConfig, out: Path) -> dict:
+    """Render a kitchen of unseen objects, predict on it, compare with its labels; returns the comparison."""
+    from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
+    from centerart.predict import PredictConfig, run_predict
+    from centerart.scenes.dataset import GenerateScenesConfig, generate_scenes, list_views
+
+    objects, scenes = out / "unseen_objects", out / "unseen_kitchen"
+    for folder in (objects, scenes):
+        if folder.is_dir():
+            shutil.rmtree(folder)
+    print(f"1/5 a kitchen of objects no model has seen (seed {cfg.unseen_seed}), stereo depth")
+    generate_objects(GenerateObjectsConfig(out=objects, category="all", count=1, seed=cfg.unseen_seed, workers=1))
+    generate_scenes(
+        GenerateScenesConfig(objects=objects, out=scenes, layout="kitchen", count=1, views_per_scene=1,
+                             seed=cfg.seed + 11, depth="stereo", workers=1, save_ir=False)
+    )  # fmt: skip
+    view = list_views(scenes)[0]
+    print("2/5 prediction with the shipped encoder and decoder")
+    record = run_predict(
+        PredictConfig(rgb=view / "rgb.png", depth=view / "depth_realistic.png", intrinsics=view / "labels.json",
+                      out=out / "predict")
+    )  # fmt: skip
+    return write_comparison(record, view, out / "predict" / "comparison.json")
+
+
+def compare_with_labels(record: dict, labels: dict) -> list[dict]:
+    """Per labelled object: found or not and, when found, the pose and joint errors of its matched prediction."""
+    import numpy as np
+
+    from centerart.geometry.matching import match_points
+    from centerart.geometry.transforms import rotation_angle_between
+
+    def pose(o):
+        return np.asarray(o["camera_T_object"])
+
+    preds, objects = record["objects"], labels["objects"]
+    matches = match_points([pose(p)[:3, 3] for p in preds], [pose(o)[:3, 3] for o in objects], MATCH_DISTANCE_M)
+    match_of = {j: i for i, j in matches}
+    rows = []
+    for j, obj in enumerate(objects):
+        row = {"object_id": obj["object_id"], "visible_fraction": obj["visible_fraction"], "found": j in match_of}
+        if j in match_of:
+            p, joint = preds[match_of[j]], obj["joint"]
+            scale, unit = (180 / np.pi, "deg") if joint["type"] == "revolute" else (100.0, "cm")
+            row.update(
+                translation_cm=100 * float(np.linalg.norm(pose(p)[:3, 3] - pose(obj)[:3, 3])),
+                rotation_deg=float(np.degrees(rotation_angle_between(pose(p)[:3, :3], pose(obj)[:3, :3]))),
+                joint_type_correct=p["joint"]["type"] == joint["type"],
+                joint_state_error=abs(p["joint"]["state"] - joint["state"]) * scale,
+                joint_state_unit=unit,
+                grasps=len(p["grasps"]),
+            )
+        rows.append(row)
+    return rows
+
+
+def print_comparison(rows: list[dict]) -> None:
+    print(f"{'object':24s} {'visible':>7s} {'found':>5s} {'t err cm':>8s} {'R err deg':>9s} {'type':>5s} {'q err':>9s}")
+    for r in rows:
+        line = f"{r['object_id']:24s} {r['visible_fraction']:7.2f} {'yes' if r['found'] else 'no':>5s}"
+        if r["found"]:
+            kind = "ok" if r["joint_type_correct"] else "wrong"
+            line += f" {r['translation_cm']:8.1f} {r['rotation_deg']:9.1f} {kind:>5s} "
+            line += f"{r['joint_state_error']:5.1f} {r['joint_state_unit']}"
+        print(line)
+
+
+def write_comparison(record: dict, view: Path, path: Path) -> dict:
+    """Compare a prediction record with a rendered view's labels; print the table and write it as JSON."""
+    import json
+
+    from centerart.utils.atomic import atomic_write_json
+
+    rows = compare_with_labels(record, json.loads((Path(view) / "labels.json").read_text()))
+    print_comparison(rows)
+    report = {"match_distance_m": MATCH_DISTANCE_M, "predictions": len(record["objects"]), "objects": rows}
+    atomic_write_json(path, report)
+    return report
+
+
+def stage_tour(cfg: DemoConfig, out: Path) -> list[Path]:
+
     from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
     from centerart.grasps.generate import GenerateGraspsConfig, generate_grasps
     from centerart.scenes.dataset import GenerateScenesConfig, generate_scenes
@@ -38,7 +143,6 @@ def run_demo(cfg: DemoConfig) -> None:
     from centerart.viz.objects_sheet import ShowObjectsConfig, show_objects
     from centerart.viz.scenes_sheet import ShowScenesConfig, show_scenes
 
-    out = Path(cfg.out)
     objects, one, grasps, sdf, scenes = (out / name for name in ("objects", "oven", "grasps", "sdf", "kitchen"))
     # Start every run from scratch: the stage commands refuse to resume folders made with other settings (e.g.
     # by an older version of this package), which is right for datasets but would stop a rerun of the demo.
@@ -47,13 +151,13 @@ def run_demo(cfg: DemoConfig) -> None:
         if folder.is_dir():
             shutil.rmtree(folder)
     pictures = []
-    print("1/4 objects")
+    print("3/5 stages: objects")
     generate_objects(
         GenerateObjectsConfig(out=objects, category="all", count=cfg.count, seed=cfg.seed, workers=cfg.workers)
     )
     pictures.append(show_objects(ShowObjectsConfig(path=objects, out=out / "objects.png", objects_per_row=2)))
 
-    print("2/4 grasp labels (one oven, 3 joint states)")
+    print("4/5 stages: grasp labels (one oven, 3 joint states), SDF samples, shipped decoder")
     # The same seed gives the same oven_0000 as in the objects folder; a folder of its own keeps the run short.
     generate_objects(GenerateObjectsConfig(out=one, category="oven", count=1, seed=cfg.seed, workers=1))
     generate_grasps(
@@ -65,13 +169,12 @@ def run_demo(cfg: DemoConfig) -> None:
         show_grasps(ShowGraspsConfig(labels=grasps, objects=one, object="oven_0000", out=out / "grasps.png"))
     )
 
-    print("3/4 SDF samples and reconstruction with the shipped decoder")
     generate_sdf(
         GenerateSdfConfig(objects=one, grasps=grasps, out=sdf, points=20000, seed=cfg.seed, workers=cfg.workers)
     )
     pictures.append(show_decoder(ShowDecoderConfig(data=sdf, object="oven_0000", out=out / "reconstruction.png")))
 
-    print("4/4 a kitchen scene with realistic depth")
+    print("5/5 stages: a kitchen scene with realistic depth")
     generate_scenes(
         GenerateScenesConfig(
             objects=objects,
@@ -85,4 +188,4 @@ def run_demo(cfg: DemoConfig) -> None:
         )
     )
     pictures.append(show_scenes(ShowScenesConfig(path=scenes, out=out / "kitchen.png")))
-    print("pictures:\n" + "\n".join(f"  {p}" for p in pictures))
+    return pictures

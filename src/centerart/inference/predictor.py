@@ -67,6 +67,11 @@ class ObjectPrediction:
     _mesher: object = field(default=None, repr=False)
 
     @property
+    def joint_code(self) -> float:
+        """The decoder's joint input (alias of ``joint_state_normalized``)."""
+        return self.joint_state_normalized
+
+    @property
     def joint_unit(self) -> str:
         return "rad" if self.joint_type == "revolute" else "m"
 
