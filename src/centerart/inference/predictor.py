@@ -22,7 +22,7 @@ from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_sh
 from centerart.inference.grasp_filter import CollisionFilterConfig, collision_free
 from centerart.inference.inputs import check_inputs
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
-from centerart.inference.refinement import RefineConfig, refine_pose_icp
+from centerart.inference.refinement import RefineConfig, SdfRefineConfig, refine_pose_icp, refine_sdf
 from centerart.models.encoder.readout import PEAK_THRESHOLD, Detection
 
 
@@ -38,6 +38,9 @@ class PredictorConfig:
     mesh_resolution: int = 128
     """Lattice cells (longest side) of meshes decoded on demand."""
     refine: RefineConfig = field(default_factory=RefineConfig)
+    """ICP of the decoded surface to the observed points (pose only)."""
+    refine_sdf: SdfRefineConfig = field(default_factory=SdfRefineConfig)
+    """Pose, shape code and joint code fitted to the observed depth through the decoder (before grasps)."""
     collision: CollisionFilterConfig = field(default_factory=CollisionFilterConfig)
 
 
@@ -134,16 +137,21 @@ class Predictor:
         cfg = self.config
         mesh_cfg = MeshConfig(resolution=cfg.grasp_resolution)
         grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k_grasps * 3, cfg.top_k_grasps))
-        code = det.shape_code.astype(np.float32)
+        code, joint, pose, info = det.shape_code.astype(np.float32), det.joint_code, det.camera_T_object, {}
         t = time.perf_counter()
+        if cfg.refine_sdf.enabled and det.mask is not None:
+            observed = backproject_depth(depth, camera.K, mask=det.mask)
+            pose, code, joint, info["sdf"] = refine_sdf(
+                self.decoder.decoder, code, joint, pose, observed, cfg.refine_sdf
+            )
+        t = self._tick("refine_s", t)
         recon, grasps = predict_shape_and_grasps(
-            self.decoder.decoder, code, det.joint_code, self.decoder.bounds, mesh_cfg, grasp_cfg, self.device
+            self.decoder.decoder, code, joint, self.decoder.bounds, mesh_cfg, grasp_cfg, self.device
         )
         t = self._tick("grasps_s", t)
-        pose, info = det.camera_T_object, {}
         if cfg.refine.icp and det.mask is not None:
             observed = backproject_depth(depth, camera.K, mask=det.mask)
-            pose, info = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
+            pose, info["icp"] = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
         t = self._tick("refine_s", t)
         grasps_cam = pose @ grasps.poses if len(grasps) else np.zeros((0, 4, 4))
         scores = grasps.scores
@@ -152,20 +160,23 @@ class Predictor:
             grasps_cam, scores = grasps_cam[keep], scores[keep]
         grasps_cam, scores = grasps_cam[: cfg.top_k_grasps], scores[: cfg.top_k_grasps]
         self._tick("filter_s", t)
-        axis_point = det.axis_point + (pose[:3, 3] - det.camera_T_object[:3, 3])  # the axis moves with ICP's shift
+        # The axis moves with the refined pose (it was predicted relative to the object).
+        delta = pose @ np.linalg.inv(det.camera_T_object)
+        axis_point = delta[:3, :3] @ det.axis_point + delta[:3, 3]
+        axis_direction = delta[:3, :3] @ det.axis_direction
         return ObjectPrediction(
             score=det.score,
             camera_T_object=pose,
             joint_type=det.joint_type,
             joint_type_probability=det.joint_type_probability,
-            axis_direction=det.axis_direction,
+            axis_direction=axis_direction,
             axis_point=axis_point,
             joint_state=det.joint_state,
-            joint_state_normalized=det.joint_code,
+            joint_state_normalized=joint,
             shape_code=code,
             grasp_poses=grasps_cam,
             grasp_scores=np.asarray(scores, float),
-            grasp_opening_directions=opening_directions(grasps_cam, det.joint_type, det.axis_direction, axis_point),
+            grasp_opening_directions=opening_directions(grasps_cam, det.joint_type, axis_direction, axis_point),
             mask=det.mask,
             peak_uv=det.peak_uv,
             refinement=info,
