@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Set up centerart on Debian 12 (bookworm): system packages, a virtual environment in .venv, the package.
 #   bash scripts/setup.sh          # runtime
-#   bash scripts/setup.sh --dev    # + test and lint tools
+#   bash scripts/setup.sh --dev    # + test and lint tools, headless Chromium (the viewer's browser test)
 # Idempotent: a second run only checks that everything is there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -28,6 +28,16 @@ if [[ -f /etc/debian_version ]]; then
     $SUDO apt-get update -qq
     $SUDO apt-get install -y -qq libusb-1.0-0 libgl1 libglib2.0-0 libegl1 libvulkan1 >/dev/null
     $SUDO apt-get install -y -qq -t bookworm-backports mesa-vulkan-drivers libegl-mesa0 libgl1-mesa-dri >/dev/null
+  fi
+fi
+
+# --dev: headless Chromium, for the 3-D viewer's browser test (tests/viz/test_viewer.py screenshots the page).
+if [[ -n "$extras" ]] && ! command -v chromium >/dev/null 2>&1; then
+  if command -v apt-get >/dev/null 2>&1; then
+    $SUDO apt-get update -qq
+    $SUDO apt-get install -y -qq chromium >/dev/null
+  else
+    echo "setup: no apt-get here; install Chromium for the viewer's browser test (it is skipped without it)" >&2
   fi
 fi
 
