@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Set up centerart on Debian 12 (bookworm): system packages, a virtual environment in .venv, the package.
 #   bash scripts/setup.sh          # runtime
-#   bash scripts/setup.sh --dev    # + test and lint tools, headless Chromium (the viewer's browser test)
+#   bash scripts/setup.sh --dev    # + test and lint tools
 # Idempotent: a second run only checks that everything is there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
