@@ -254,7 +254,6 @@ def object_pixel(k: int, width: int, height: int) -> tuple[int, int]:
     return round(float(width / 2 + (uv[0] - WIDTH / 2) * s)), round(float(height / 2 + (uv[1] - HEIGHT / 2) * s))
 
 
-@pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed (bash scripts/setup.sh --dev installs it)")
 def test_browser_shows_meshes(viewer, tmp_path):
     """The page loads and renders (WebGL via SwiftShader): at each object's projected centre the screenshot shows
