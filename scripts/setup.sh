@@ -31,6 +31,16 @@ if [[ -f /etc/debian_version ]]; then
   fi
 fi
 
+# --dev: headless Chromium, for the 3-D viewer's browser test (tests/viz/test_viewer.py screenshots the page).
+if [[ -n "$extras" ]] && ! command -v chromium >/dev/null 2>&1; then
+  if command -v apt-get >/dev/null 2>&1; then
+    $SUDO apt-get update -qq
+    $SUDO apt-get install -y -qq chromium >/dev/null
+  else
+    echo "setup: no apt-get here; install Chromium for the viewer's browser test (it is skipped without it)" >&2
+  fi
+fi
+
 python3 -c 'import sys; assert sys.version_info[:2] == (3, 11), "centerart needs Python 3.11"' 
 [[ -x .venv/bin/python ]] || python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip

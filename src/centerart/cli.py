@@ -119,6 +119,13 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "the main job on its built-in default (see README quick start)",
         )
     },
+    "view": {
+        "": Command(
+            "centerart.viz.viewer:ViewConfig",
+            "centerart.commands:view",
+            "interactive 3-D viewer of a prediction folder, in a web browser",
+        )
+    },
 }
 
 

@@ -141,3 +141,11 @@ def eval_decoder(cfg) -> None:
     report = evaluate_decoder(cfg)
     print(json.dumps(report["summary"], indent=1))
     print(f"wrote {Path(cfg.out) / 'report.json'}")
+
+
+def view(cfg) -> None:
+    from centerart.viz.viewer import block_until_interrupted, serve_viewer, viewer_url
+
+    server = serve_viewer(cfg, block=False)
+    print(f"3-D viewer of {cfg.path}: open {viewer_url(server)} in a web browser (Ctrl+C to stop)", flush=True)
+    block_until_interrupted(server)
