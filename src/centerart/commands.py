@@ -95,6 +95,10 @@ def predict(cfg) -> None:
     timing = ", ".join(f"{k} {v:.2f}" for k, v in record["timing_s"].items())
     print(f"{len(record['objects'])} objects ({timing})")
     print(f"wrote {cfg.out}/ (predictions.json, overlay.png, scene.glb, meshes); 3-D view: centerart view {cfg.out}")
+    if cfg.view:
+        from centerart.viz.viewer import ViewConfig
+
+        view(ViewConfig(path=cfg.out))
 
 
 def demo(cfg) -> None:
