@@ -58,21 +58,27 @@ def main() -> None:
     ap.add_argument("--objects", type=Path, default=None, help="objects root for the shape metric (skip if absent)")
     ap.add_argument("--depth", choices=["realistic", "true"], default="realistic")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--peak-threshold", type=float, default=readout.PEAK_THRESHOLD)
+    ap.add_argument("--sweep", type=float, nargs="*", default=[0.3, 0.4, 0.5, 0.6, 0.7],
+                    help="also report precision / recall with these peak thresholds")  # fmt: skip
     ap.add_argument("--shape-limit", type=int, default=30)
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     loaded = load_encoder(args.checkpoint)
     decoder = load_decoder(None)
-    results, times, matched = [], [], []
+    results, times, matched, sweep = [], [], [], {t: [] for t in args.sweep}
     for k, view_dir in enumerate(collect_views(args.scenes)):
         v = load_view(view_dir)
         depth = v.depth_realistic if args.depth == "realistic" and v.depth_realistic is not None else v.depth_true
         camera = Intrinsics.from_matrix(v.labels["K"], v.labels["width"], v.labels["height"])
         t0 = time.perf_counter()
-        enc = detect_objects(loaded.encoder, v.rgb, depth, camera)
+        enc = detect_objects(loaded.encoder, v.rgb, depth, camera, min([args.peak_threshold, *args.sweep]))
         if k > 0:
             times.append(time.perf_counter() - t0)
+        for t in args.sweep:
+            sweep[t].append(em.view_metrics([d for d in enc.detections if d.score >= t], v.labels))
+        enc.detections = [d for d in enc.detections if d.score >= args.peak_threshold]
         res = em.view_metrics(enc.detections, v.labels, decoder.codes)
         results.append(res)
         matched += [(view_dir, enc.detections[r["prediction"]], v.labels["objects"][r["label"]]) for r in res["rows"]]
@@ -83,10 +89,13 @@ def main() -> None:
         "thresholds": {
             "match_distance_m": em.MATCH_DISTANCE_M,
             "min_visible_fraction": em.MIN_VISIBLE_FRACTION,
-            "peak_threshold": readout.PEAK_THRESHOLD,
+            "peak_threshold": args.peak_threshold,
         },
         "overall": em.summarize(results),
         "per_category": em.summarize_by_category(results),
+        "peak_threshold_sweep": {
+            str(t): {k: em.summarize(r)[k] for k in ("precision", "recall")} for t, r in sweep.items()
+        },
         "inference_ms_per_image": {
             "median": 1000 * float(np.median(times)),
             "threads": args.threads,
