@@ -114,7 +114,10 @@ def run_predict(cfg: PredictConfig) -> dict:
     """Predict and write the output folder; returns the predictions record."""
     from centerart.inference.predictor import Predictor
 
+    from centerart.inference.inputs import check_inputs
+
     rgb, depth, camera, sources = resolve_inputs(cfg)
+    check_inputs(rgb, depth, camera)  # before loading any model: a bad input is reported at once
     predictor = Predictor(cfg.encoder, cfg.decoder, cfg.device, cfg.predictor)
     preds = predictor.predict(rgb, depth, camera)
     out = Path(cfg.out)

@@ -68,3 +68,24 @@ def test_holes_are_normal():
     depth[10:20] = 0
     out = check_inputs(np.zeros((48, 64, 3), np.uint8), depth, CAM)
     assert (out[:20] == 0).all() and (out[20:] == 1).all()
+
+
+def test_predict_cli_names_bad_inputs(tmp_path, capsys):
+    from centerart.cli import main
+
+    rgb = tmp_path / "rgb.png"
+    Image.fromarray(np.zeros((48, 64, 3), np.uint8)).save(rgb)
+    Image.fromarray(np.full((40, 64), 1500, np.uint16)).save(tmp_path / "depth.png")
+    (tmp_path / "k.json").write_text(json.dumps({"K": CAM.K.tolist(), "width": 64, "height": 48}))
+    args = ["predict", "--rgb", str(rgb), "--depth", str(tmp_path / "depth.png"), "--intrinsics",
+            str(tmp_path / "k.json"), "--out", str(tmp_path / "out")]  # fmt: skip
+    assert main(args) == 2
+    assert "rgb is 64x48 but depth is 64x40" in capsys.readouterr().err
+    assert main(["predict", "--rgb", str(rgb), "--out", str(tmp_path / "out")]) == 2
+    assert "--rgb needs --depth and --intrinsics" in capsys.readouterr().err
+    Image.fromarray(np.full((48, 64), 1500, np.uint16)).save(tmp_path / "depth.png")
+    (tmp_path / "bad.pt").write_bytes(b"\x80\x02garbage")
+    assert main([*args, "--encoder", str(tmp_path / "bad.pt")]) == 2
+    err = capsys.readouterr().err
+    assert "bad.pt: not a readable encoder checkpoint" in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
