@@ -112,9 +112,8 @@ def write_outputs(tmp: Path, predictor, preds, rgb, depth, camera, cfg: PredictC
 
 def run_predict(cfg: PredictConfig) -> dict:
     """Predict and write the output folder; returns the predictions record."""
-    from centerart.inference.predictor import Predictor
-
     from centerart.inference.inputs import check_inputs
+    from centerart.inference.predictor import Predictor
 
     rgb, depth, camera, sources = resolve_inputs(cfg)
     check_inputs(rgb, depth, camera)  # before loading any model: a bad input is reported at once
