@@ -7,14 +7,17 @@ Input: a batch of letterboxed images, ``rgb`` (B, 3, H, W) in [0, 1] and ``depth
 - at stride ``head_stride`` (B, C, H/s, W/s), where each cell's values describe the object whose centre it
   sees: ``rotation`` (9, a raw 3x3 matrix, row-major; :func:`rotation_from_raw` projects it to SO(3)),
   ``center_offset`` (2, pixels / ``OFFSET_SCALE_PX`` from the cell centre to the projected object origin),
-  ``center_depth`` (1, z of the object origin, m), ``shape_code`` (code_dim), ``joint_code`` (1, the normalized
+  ``center_depth`` (1, z of the object origin, m: the cell's observed depth plus a predicted residual),
+  ``shape_code`` (code_dim), ``joint_code`` (1, the normalized
   joint state in [0, 1], sigmoid), ``joint_type_logits`` (2: revolute, prismatic), ``axis_direction`` (3, unit),
   ``axis_point_offset`` (3, m: the point of the joint axis nearest the object origin, minus that origin) and
   ``joint_state`` (1, metric: rad or m).
 
 Why centre offset + depth instead of the paper's direct translation: with the intrinsics as an input the
 translation ``t = depth * K^-1 [u, v, 1]`` is exact for any camera, and the depth is what the depth channel
-measures; a directly regressed translation ties the network to the training camera.
+measures; a directly regressed translation ties the network to the training camera. The depth head predicts a
+residual to the mean observed depth of its cell (:func:`cell_depth`): the object origin lies a fraction of the
+object's size behind the surface the cell sees, which is much easier to learn than an absolute distance.
 """
 
 from __future__ import annotations
@@ -182,8 +185,24 @@ class RGBDEncoder(nn.Module):
         heat = F.interpolate(heat, scale_factor=4, mode="bilinear", align_corners=False)[:, 0, :h, :w]
         s8 = p[1] + sum(F.interpolate(q, size=p[1].shape[-2:], mode="bilinear", align_corners=False) for q in p[2:])
         dense = torch.cat([self.pose_head(s8), self.object_head(s8)], dim=1)
-        dense = dense[..., : -(-h // self.config.head_stride), : -(-w // self.config.head_stride)]
-        return EncoderOutput(torch.sigmoid(heat), split_dense(dense, self.layout), self.config.head_stride)
+        hc, wc = -(-h // self.config.head_stride), -(-w // self.config.head_stride)
+        fields = split_dense(dense[..., :hc, :wc], self.layout)
+        observed = cell_depth(depth_n[:, :1], depth_n[:, 1:], self.config.head_stride)[..., :hc, :wc]
+        fields["center_depth"] = fields["center_depth"] + observed
+        return EncoderOutput(torch.sigmoid(heat), fields, self.config.head_stride)
+
+
+def cell_depth(depth: torch.Tensor, valid: torch.Tensor, stride: int, fallback_cells: int = 5) -> torch.Tensor:
+    """(B, 1, H/s, W/s): mean valid depth (m) of each stride cell; a cell without a valid pixel takes the mean of
+    the valid pixels in the ``fallback_cells`` x ``fallback_cells`` cells around it (0 if none)."""
+    depth_sum = F.avg_pool2d(depth * valid, stride, stride, ceil_mode=True)
+    count = F.avg_pool2d(valid, stride, stride, ceil_mode=True)
+    near = count > 0
+    pad = fallback_cells // 2
+    wide_sum = F.avg_pool2d(depth_sum, fallback_cells, 1, pad, count_include_pad=False)
+    wide_count = F.avg_pool2d(count, fallback_cells, 1, pad, count_include_pad=False)
+    wide = wide_sum / wide_count.clamp_min(1e-6)
+    return torch.where(near, depth_sum / count.clamp_min(1e-6), wide)
 
 
 def split_dense(dense: torch.Tensor, layout: dict[str, int]) -> dict[str, torch.Tensor]:
