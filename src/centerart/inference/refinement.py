@@ -2,9 +2,10 @@
 
 ICP (the paper's option): the decoded surface, as the camera would see it (points facing the camera), is
 aligned to the object's observed points (its instance mask back-projected) with point-to-point ICP (open3d),
-starting from the predicted pose. The result is rejected, keeping the prediction, when ICP moves the object by
-more than ``max_shift_m`` or fits fewer than ``min_fitness`` of the points (the published implementation rejected
-centroid errors over 0.3 m).
+starting from the predicted pose with its translation moved so that the centroid of the surface it should see lands
+on the centroid of the observed points (the published initialisation). The result is rejected, keeping the
+prediction, when ICP moves the object by more than ``max_shift_m`` (0.3 m, the published threshold) or fits fewer
+than ``min_fitness`` of the points.
 
 SDF fitting (beyond the paper, :func:`refine_sdf`): the object's pose (a 6-D correction), shape code and joint code
 are optimised together, decoder frozen, so that the decoded SDF is zero at the observed points and positive up to
@@ -26,9 +27,12 @@ class RefineConfig:
     """ICP of the decoded surface to the object's observed points."""
     icp_max_correspondence_m: float = 0.05
     icp_iterations: int = 30
-    max_shift_m: float = 0.15
+    max_shift_m: float = 0.3
+    """Reject a refinement that moves the object further (the published rejection threshold)."""
     min_fitness: float = 0.3
     surface_points: int = 4000
+    centroid_init: bool = True
+    """Start ICP with the seen surface's centroid moved onto the observed points' centroid (published)."""
 
 
 def visible_surface_points(mesh, camera_T_object: np.ndarray, count: int, seed: int = 0) -> np.ndarray:
@@ -49,10 +53,14 @@ def refine_pose_icp(mesh, camera_T_object: np.ndarray, observed: np.ndarray, cfg
     if len(observed) < 50 or len(mesh.faces) == 0:
         return camera_T_object, {"accepted": False, "reason": "too few observed points or empty mesh"}
     src = visible_surface_points(mesh, camera_T_object, cfg.surface_points)
+    observed = np.asarray(observed, float)
+    init = camera_T_object.copy()
+    if cfg.centroid_init:  # the published initialisation: move the seen surface's centroid onto the observed one
+        init[:3, 3] += observed.mean(0) - (src @ camera_T_object[:3, :3].T + camera_T_object[:3, 3]).mean(0)
     src_pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(src))
-    dst_pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.asarray(observed, float)))
+    dst_pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(observed))
     result = o3d.pipelines.registration.registration_icp(
-        src_pc, dst_pc, cfg.icp_max_correspondence_m, camera_T_object,
+        src_pc, dst_pc, cfg.icp_max_correspondence_m, init,
         o3d.pipelines.registration.TransformationEstimationPointToPoint(),
         o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=cfg.icp_iterations),
     )  # fmt: skip
