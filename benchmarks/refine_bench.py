@@ -39,12 +39,13 @@ def main() -> None:
     ap.add_argument("--views", type=int, default=30)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS))
+    ap.add_argument("--encoder", type=Path, default=None, help="encoder checkpoint (default: the shipped one)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     views = collect_views(args.scenes)
     views = views[:: max(1, len(views) // args.views)][: args.views]
-    predictor = Predictor()
+    predictor = Predictor(args.encoder)
     report = {"views": len(views), "thresholds": {"match_distance_m": em.MATCH_DISTANCE_M,
               "min_visible_fraction": em.MIN_VISIBLE_FRACTION}, "variants": {}}  # fmt: skip
     for name in args.variants:

@@ -93,8 +93,10 @@ def _trainer(cfg: TrainEncoderConfig, out: Path, has_val: bool):
     from lightning.pytorch.loggers import CSVLogger, TensorBoardLogger
 
     # No monitor, top 1, every epoch: the newest epoch is kept and last.ckpt (what a rerun resumes from) is refreshed
-    # after every epoch. (save_top_k=0 saved nothing while validation ran only every few epochs.)
-    ckpt_cb = ModelCheckpoint(dirpath=out / "lightning", save_last=True, save_top_k=1, every_n_epochs=1)
+    # after every epoch, validated or not (by default Lightning saves at validation ends only).
+    ckpt_cb = ModelCheckpoint(
+        dirpath=out / "lightning", save_last=True, save_top_k=1, every_n_epochs=1, save_on_train_epoch_end=True
+    )
     callbacks = [ckpt_cb, TQDMProgressBar(refresh_rate=5)] if cfg.progress else [ckpt_cb]
     return L.Trainer(
         max_epochs=cfg.epochs,
