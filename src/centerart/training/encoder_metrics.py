@@ -3,7 +3,8 @@
 Thresholds (constants, printed in every report that uses them): a prediction matches a labelled object when their
 3-D centres (object origins, camera frame) are closer than ``MATCH_DISTANCE_M`` (Hungarian assignment); recall
 counts labelled objects at least ``MIN_VISIBLE_FRACTION`` visible; a prediction matched to a less visible object
-is neither a true nor a false positive.
+is neither a true nor a false positive. ``image_recall`` / ``image_precision`` are a looser image-space check
+(a peak inside a labelled object's bounding box), which tells "found in the image" apart from "3-D centre right".
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ def view_metrics(detections: list[Detection], labels: dict, codes: dict | None =
         "found": int(sum(1 for j in matched_true if visible[j])),
         "predictions": len(detections) - sum(1 for _, j in pairs if not visible[j]),
         "true_positives": int(sum(1 for _, j in pairs if visible[j])),
+        "all_predictions": len(detections),
     }
     rows = [object_errors(detections[i], objects[j], codes) for i, j in pairs]
     for (i, j), row in zip(pairs, rows, strict=True):
@@ -82,12 +84,17 @@ def summarize(results: list[dict]) -> dict:
     true = sum(r["counts"]["true_objects"] for r in results)
     found = sum(r["counts"]["found"] for r in results)
     rows = [row for r in results for row in r["rows"]]
+    in_image = sum(r["counts"].get("found_in_image", 0) for r in results)
+    on_objects = sum(r["counts"].get("peaks_on_objects", 0) for r in results)
+    all_preds = sum(r["counts"].get("all_predictions", 0) for r in results)
     out = {
         "views": len(results),
         "true_objects": true,
         "precision": tp / preds if preds else 0.0,
         "recall": found / true if true else 0.0,
         "matched": len(rows),
+        "image_recall": in_image / true if true else 0.0,
+        "image_precision": on_objects / all_preds if all_preds else 0.0,
     }
     if rows:
         out.update(summarize_rows(rows))

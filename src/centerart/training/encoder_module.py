@@ -10,6 +10,7 @@ import lightning as L
 import torch
 
 from centerart.models.encoder.config import EncoderConfig
+from centerart.models.encoder.inputs import Letterbox
 from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder
 from centerart.models.encoder.readout import read_objects
@@ -55,6 +56,10 @@ class EncoderModule(L.LightningModule):
         for b, meta in enumerate(batch["meta"]):
             detections = read_objects(out, batch["K"][b].cpu().numpy(), index=b)
             labels = self.trainer.val_dataloaders.dataset.labels_of(meta["view"])
+            cfg = self.encoder.config
+            box = Letterbox.fit(labels["width"], labels["height"], cfg.input_width, cfg.input_height)  # no augmentation
+            for d in detections:
+                d.peak_uv = box.to_camera_pixels(d.peak_uv)
             self._val_results.append(view_metrics(detections, labels, self.codes))
 
     def on_validation_epoch_end(self):
