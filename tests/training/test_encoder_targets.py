@@ -6,7 +6,7 @@ from centerart.models.encoder.inputs import Letterbox
 from centerart.training.encoder_targets import MIN_CELL_WEIGHT, build_targets
 
 
-def _object(object_id, mean_uv, t, joint_type="revolute"):
+def _object(object_id, mean_uv, t, bbox, joint_type="revolute"):
     pose = np.eye(4)
     pose[:3, 3] = t
     return {
@@ -14,6 +14,7 @@ def _object(object_id, mean_uv, t, joint_type="revolute"):
         "category": "oven",
         "camera_T_object": pose.tolist(),
         "visible_fraction": 1.0,
+        "bbox_xyxy": bbox,
         "heatmap_gaussian": {"mean_uv": list(mean_uv), "cov_uv": [[100.0, 0.0], [0.0, 64.0]]},
         "joint": {
             "type": joint_type,
@@ -29,7 +30,12 @@ LABELS = {
     "width": 160,
     "height": 120,
     "K": [[150.0, 0.0, 79.5], [0.0, 150.0, 59.5], [0.0, 0.0, 1.0]],
-    "objects": [_object("a", (40, 60), [-0.4, 0.0, 2.0]), _object("b", (120, 30), [0.5, -0.3, 2.5], "prismatic")],
+    # a: origin projects to (49.5, 59.5), inside its box -> the peak goes there; b: origin projects to (109.5, 41.5),
+    # outside its box (hidden or truncated centre) -> the peak stays at the mask centroid (120, 30).
+    "objects": [
+        _object("a", (40, 60), [-0.4, 0.0, 2.0], [20, 40, 70, 80]),
+        _object("b", (120, 30), [0.5, -0.3, 2.5], [115, 20, 159, 40], "prismatic"),
+    ],
 }
 
 
@@ -38,12 +44,12 @@ def test_two_object_targets():
     t = build_targets(LABELS, box, {"a": np.full(4, 0.5, np.float32)}, code_dim=4, stride=8, max_objects=3)
     heat = t["heatmap"]
     assert heat.shape == (60, 80)
-    # Peaks move with the letterbox: (u + 0.5) * 0.5 - 0.5.
-    assert heat[round(29.75), round(19.75)] > 0.95 and heat[round(14.75), round(59.75)] > 0.95
+    # Peaks move with the letterbox: (u + 0.5) * 0.5 - 0.5: a at (24.5, 29.5), b at (59.75, 14.75).
+    assert heat[29:31, 24:26].max() > 0.95 and heat[round(14.75), round(59.75)] > 0.95
     assert heat[0, 40] < 0.05
     obj = t["cell_object"]
     assert obj.shape == (8, 10)
-    assert obj[29 // 8, 19 // 8] == 0 and obj[14 // 8, 59 // 8] == 1
+    assert obj[29 // 8, 24 // 8] == 0 and obj[14 // 8, 59 // 8] == 1
     assert (t["cell_weight"][obj >= 0] > MIN_CELL_WEIGHT).all() and (
         obj[t["cell_weight"] <= MIN_CELL_WEIGHT] == -1
     ).all()
