@@ -67,3 +67,22 @@ def test_objects_whose_centre_leaves_the_input_are_dropped():
     t = build_targets(LABELS, box, {}, code_dim=4, stride=8, max_objects=3)
     assert t["present"].tolist() == [True, False, False]
     assert np.allclose(t["translation"][0], [0.5, -0.3, 2.5])
+
+
+def test_view_metrics_on_a_known_case():
+    from centerart.models.encoder.readout import Detection
+    from centerart.training.encoder_metrics import summarize, view_metrics
+
+    labels = {"objects": [dict(o, visible_fraction=v) for o, v in zip(LABELS["objects"], (1.0, 0.2), strict=True)]}
+
+    def det(t, uv):
+        pose = np.eye(4)
+        pose[:3, 3] = t
+        return Detection(0.9, np.asarray(uv, float), pose, np.zeros(4), 0.25, "revolute", 0.9,
+                         np.array([0.0, 1.0, 0.0]), np.zeros(3), 0.4)  # fmt: skip
+
+    # One detection 5 cm from object a (peak on its box), one far from everything (peak off every box).
+    result = summarize([view_metrics([det([-0.35, 0.0, 2.0], (45, 60)), det([2.0, 2.0, 5.0], (5, 5))], labels)])
+    assert result["recall"] == 1.0 and result["precision"] == 0.5  # b is under 30% visible: not counted
+    assert result["image_recall"] == 1.0 and result["image_precision"] == 0.5
+    assert abs(result["translation_cm_median"] - 5.0) < 1e-6 and result["joint_type_accuracy"] == 1.0
