@@ -138,4 +138,4 @@ def refine_sdf(decoder, code: np.ndarray, joint: float, camera_T_object: np.ndar
     info = {"accepted": shift <= cfg.max_shift_m, "shift_m": shift, "data_loss": float(data.detach())}
     if not info["accepted"]:
         return camera_T_object, code, joint, info
-    return pose, z.detach().numpy(), float(torch.sigmoid(j_logit)), info
+    return pose, z.detach().numpy(), float(torch.sigmoid(j_logit).detach()), info
