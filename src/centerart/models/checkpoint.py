@@ -22,6 +22,7 @@ import numpy as np
 import torch
 
 from centerart.errors import CenterArtError
+from centerart.models.checkpoint_files import read_blob, write_blob
 from centerart.models.decoder import DecoderConfig, SGDFDecoder
 
 FORMAT = "centerart-sgdf-decoder"
@@ -58,9 +59,6 @@ def save_checkpoint(
     train_config: dict,
     metrics: dict | None = None,
 ) -> Path:
-    import io
-
-    from centerart.utils.atomic import atomic_write_bytes
     from centerart.utils.manifest import code_version
 
     blob = {
@@ -76,25 +74,11 @@ def save_checkpoint(
         "metrics": metrics or {},
         "code_version": code_version(),
     }
-    buf = io.BytesIO()
-    torch.save(blob, buf)
-    atomic_write_bytes(Path(path), buf.getvalue())
-    return Path(path)
+    return write_blob(path, blob)
 
 
 def _read(path: Path) -> dict:
-    path = Path(path)
-    if not path.is_file():
-        raise CenterArtError(f"{path}: checkpoint file not found")
-    try:
-        blob = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as err:  # torch raises many types for corrupt/foreign files
-        raise CenterArtError(f"{path}: not a readable torch checkpoint ({type(err).__name__}: {err})") from None
-    if not isinstance(blob, dict) or blob.get("format") != FORMAT:
-        raise CenterArtError(f"{path}: not a centerart decoder checkpoint (expected format {FORMAT!r})")
-    if blob.get("version") != VERSION:
-        raise CenterArtError(f"{path}: checkpoint version {blob.get('version')} unsupported (expected {VERSION})")
-    return blob
+    return read_blob(path, FORMAT, VERSION, "decoder")
 
 
 def load_shape_codes(path: Path) -> dict[str, np.ndarray]:

@@ -10,13 +10,11 @@ so :func:`load_encoder` refuses a different decoder with a clear error.
 from __future__ import annotations
 
 import hashlib
-import io
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import torch
-
 from centerart.errors import CenterArtError
+from centerart.models.checkpoint_files import read_blob, write_blob
 from centerart.models.encoder.config import EncoderConfig
 from centerart.models.encoder.network import RGBDEncoder
 
@@ -42,7 +40,6 @@ def save_encoder(
     path: Path, encoder: RGBDEncoder, decoder_path: Path, decoder_object_ids: list[str], train_config: dict,
     metrics: dict | None = None,
 ) -> Path:  # fmt: skip
-    from centerart.utils.atomic import atomic_write_bytes
     from centerart.utils.manifest import code_version
 
     blob = {
@@ -60,30 +57,11 @@ def save_encoder(
         "metrics": metrics or {},
         "code_version": code_version(),
     }
-    buf = io.BytesIO()
-    torch.save(blob, buf)
-    atomic_write_bytes(Path(path), buf.getvalue())
-    return Path(path)
+    return write_blob(path, blob)
 
 
 def _read(path: Path) -> dict:
-    path = Path(path)
-    if not path.is_file():
-        raise CenterArtError(f"{path}: encoder checkpoint not found")
-    try:
-        blob = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as err:  # torch raises many types for truncated, corrupt or foreign files
-        first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-        raise CenterArtError(
-            f"{path}: not a readable encoder checkpoint (damaged or not a torch file: {first})"
-        ) from None
-    if not isinstance(blob, dict) or blob.get("format") != FORMAT:
-        raise CenterArtError(f"{path}: not a centerart encoder checkpoint (expected format {FORMAT!r})")
-    if blob.get("version") != VERSION:
-        raise CenterArtError(
-            f"{path}: encoder checkpoint version {blob.get('version')} unsupported (expected {VERSION})"
-        )
-    return blob
+    return read_blob(path, FORMAT, VERSION, "encoder")
 
 
 def load_encoder(path: Path | None = None, decoder_path: Path | None = None, device="cpu") -> LoadedEncoder:
