@@ -1,8 +1,8 @@
 """Pictures of a prediction: detections, poses, joint axes and top grasps drawn on the RGB image.
 
-Colours: each object has a palette colour (its mask tint, caption and grasps); pose axes x red, y green, z blue
-(0.2 m); the joint axis is yellow with a dot at the predicted axis point; grasps are drawn as the gripper's
-outline (palm bar and two fingers), the best one thickest.
+Colours: each object has a palette colour (its region's outline and light tint, its caption's swatch and its
+grasps); pose axes x red, y green, z blue (0.2 m); the joint axis is yellow with a dot at the predicted axis point;
+grasps are drawn as the open gripper's outline (palm bar and two fingers), the best one thickest.
 """
 
 from __future__ import annotations
@@ -30,26 +30,40 @@ def draw_grasps(img: np.ndarray, poses: np.ndarray, K: np.ndarray, color, top_k:
         if not np.isfinite(uv).all():
             continue
         uv = np.round(uv).astype(int)
-        thick = 3 if rank == min(top_k, len(poses)) - 1 else 1
-        for a, b in ((0, 1), (2, 3), (4, 5)):
-            cv2.line(img, tuple(uv[a]), tuple(uv[b]), tuple(int(c) for c in color), thick, cv2.LINE_AA)
+        best = rank == min(top_k, len(poses)) - 1
+        for a, b in ((0, 1), (2, 3), (4, 5)):  # a dark outline keeps the gripper visible on any background
+            cv2.line(img, tuple(uv[a]), tuple(uv[b]), (20, 20, 20), 5 if best else 3, cv2.LINE_AA)
+            cv2.line(img, tuple(uv[a]), tuple(uv[b]), tuple(int(c) for c in color), 3 if best else 1, cv2.LINE_AA)
+
+
+def caption(img: np.ndarray, text: str, org: tuple[int, int], color, scale: float) -> None:
+    """White text on a dark box, with a colour swatch that links it to its object."""
+    font, size = cv2.FONT_HERSHEY_SIMPLEX, 0.45 * scale
+    (w, h), base = cv2.getTextSize(text, font, size, 1)
+    x = int(np.clip(org[0], 0, max(0, img.shape[1] - w - 14)))
+    y = int(np.clip(org[1], h + 4, img.shape[0] - base - 2))
+    cv2.rectangle(img, (x, y - h - 4), (x + w + 14, y + base + 2), (25, 25, 25), -1)
+    cv2.rectangle(img, (x + 2, y - h - 1), (x + 9, y + base - 1), tuple(int(c) for c in color), -1)
+    cv2.putText(img, text, (x + 12, y), font, size, (245, 245, 245), 1, cv2.LINE_AA)
 
 
 def draw_prediction(rgb: np.ndarray, preds, K: np.ndarray, top_k: int = 3) -> np.ndarray:
-    """RGB with masks tinted, poses, joint axes, top grasps and a caption per object."""
+    """RGB with each object's region outlined, its pose, joint axis, top grasps and a caption."""
     img = rgb[..., :3].copy()
     for k, p in enumerate(preds):
         if p.mask is not None:
             color = PALETTE[k % len(PALETTE)]
-            img[p.mask] = (0.6 * img[p.mask] + 0.4 * color).astype(np.uint8)
+            img[p.mask] = (0.8 * img[p.mask] + 0.2 * color).astype(np.uint8)
+            contours, _ = cv2.findContours(p.mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+            cv2.drawContours(img, contours, -1, tuple(int(c) for c in color), 2, cv2.LINE_AA)
     img = draw_labels(img, detections_as_labels(preds, K))
     scale = img.shape[1] / 640
     for k, p in enumerate(preds):
         color = PALETTE[k % len(PALETTE)]
         draw_grasps(img, p.grasp_poses, K, color, top_k)
         u, v = np.round(p.peak_uv).astype(int) if p.peak_uv is not None else (10, 20 + 15 * k)
-        text = f"#{k} {p.joint_type[:4]} q={p.joint_state:.2f}{p.joint_unit} s={p.score:.2f} g={len(p.grasp_poses)}"
-        cv2.putText(img, text, (int(u) + 6, int(v)), cv2.FONT_HERSHEY_SIMPLEX, 0.42 * scale, (0, 0, 0), 3, cv2.LINE_AA)
-        cv2.putText(img, text, (int(u) + 6, int(v)), cv2.FONT_HERSHEY_SIMPLEX, 0.42 * scale,
-                    tuple(int(c) for c in color), 1, cv2.LINE_AA)  # fmt: skip
+        text = (
+            f"#{k} {p.joint_type} {p.joint_state:.2f} {p.joint_unit}  score {p.score:.2f}  {len(p.grasp_poses)} grasps"
+        )
+        caption(img, text, (int(u) + 8, int(v) - 8), color, scale)
     return img
