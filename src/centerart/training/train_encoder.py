@@ -45,7 +45,8 @@ class TrainEncoderConfig:
     lr: float = 6e-4
     seed: int = 0
     max_minutes: float = 0.0
-    """Stop after this much training time (0: no limit); the checkpoint is written either way."""
+    """Stop after this much training time (0: no limit), counted over resumed runs too (Lightning keeps the
+    elapsed time in last.ckpt); the checkpoint is written either way."""
     val_every: int = 5
     val_depth: Literal["realistic", "true"] = "realistic"
     accelerator: Literal["auto", "cpu", "gpu"] = "auto"

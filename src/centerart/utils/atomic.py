@@ -2,6 +2,9 @@
 
 Every stage writes an item into a hidden temporary sibling first and renames it into place; a rename within one
 file system is atomic on POSIX, so a crash or Ctrl-C leaves only a ``.tmp-*`` entry that the next run removes.
+``tempfile`` creates its files 0600 and folders 0700 whatever the umask; they are given the permissions a plain
+``open`` / ``mkdir`` would (0666 / 0777 less the umask) before the rename, so a dataset one user makes can be read by
+a group as the umask intends.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ def atomic_directory(final: Path) -> Iterator[Path]:
     tmp = Path(tempfile.mkdtemp(prefix=f".tmp-{final.name}-", dir=final.parent))
     try:
         yield tmp
+        os.chmod(tmp, 0o777 & ~current_umask())
         if final.exists():
             shutil.rmtree(final)
         os.replace(tmp, final)
@@ -40,10 +44,18 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
+        os.chmod(tmp, 0o666 & ~current_umask())
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def current_umask() -> int:
+    """The process umask (reading it means setting it; it is set straight back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def atomic_write_json(path: Path, obj: Any) -> None:
