@@ -151,7 +151,8 @@ def train_encoder(cfg: TrainEncoderConfig) -> dict:
     images = trainer.global_step * cfg.batch_size * cfg.devices * cfg.num_nodes
     metrics.update(train_seconds_this_run=seconds, steps=trainer.global_step, epochs=trainer.current_epoch)
     metrics["resumed"] = bool(resumed)
-    metrics["train_images_per_second"] = images / max(seconds, 1e-9)  # since the start of this run's steps
+    # A resumed run's global step counts earlier runs' steps too: no honest rate without the restored step count.
+    metrics["train_images_per_second"] = None if resumed else images / max(seconds, 1e-9)
     path = save_encoder(out / "encoder.pt", module.encoder.cpu(), decoder_path, sorted(codes), config_dict, metrics)
     atomic_write_json(out / "metrics.json", metrics)
     return {"checkpoint": path, "metrics": metrics}
