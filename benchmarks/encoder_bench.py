@@ -12,13 +12,13 @@ letterboxing and peak read-out included, first image (warm-up) excluded.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
 import numpy as np
 import torch
 
+from bench_report import emit
 from centerart.geometry.camera import Intrinsics
 from centerart.models.checkpoint import load_decoder
 from centerart.models.encoder import readout
@@ -107,10 +107,7 @@ def main() -> None:
     }
     if args.objects is not None:
         report["shape_from_predicted_code"] = shape_errors(matched, decoder, args.objects, args.shape_limit)
-    text = json.dumps(report, indent=1)
-    print(text)
-    if args.out:
-        args.out.write_text(text + "\n")
+    emit(report, args.out)
 
 
 if __name__ == "__main__":

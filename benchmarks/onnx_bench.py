@@ -8,7 +8,6 @@ decoder MLP (a batch of query points): same outputs within tolerance? faster? Pr
 from __future__ import annotations
 
 import argparse
-import json
 import tempfile
 import time
 from pathlib import Path
@@ -16,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from bench_report import emit
 from centerart.models.checkpoint import load_decoder
 from centerart.models.encoder.checkpoint import load_encoder
 
@@ -92,10 +92,7 @@ def main() -> None:
             "points": n,
             **compare("decoder", DecoderFlat(dec), dec_in, args.repeats, args.threads, tmp),
         }
-    text = json.dumps(report, indent=1)
-    print(text)
-    if args.out:
-        args.out.write_text(text + "\n")
+    emit(report, args.out)
 
 
 if __name__ == "__main__":

@@ -12,7 +12,6 @@ decoded on demand after the prediction). The first image (warm-up) is excluded.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -20,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from bench_report import emit
 from centerart.inference.predictor import Predictor, PredictorConfig
 from centerart.inference.refinement import RefineConfig
 from centerart.scenes.dataset import load_view
@@ -69,10 +69,7 @@ def main() -> None:
         "median_seconds_by_objects_found": groups,
         "per_image": rows,
     }
-    text = json.dumps(report, indent=1)
-    print(text)
-    if args.out:
-        args.out.write_text(text + "\n")
+    emit(report, args.out)
 
 
 if __name__ == "__main__":

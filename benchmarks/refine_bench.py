@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from bench_report import emit
 from centerart.inference.predictor import Predictor, PredictorConfig
 from centerart.inference.refinement import RefineConfig, SdfRefineConfig
 from centerart.scenes.dataset import load_view
@@ -59,10 +60,7 @@ def main() -> None:
             results.append(em.view_metrics(preds, v.labels))
         report["variants"][name] = {**em.summarize(results), "seconds_per_image_median": float(np.median(seconds))}
         print(name, json.dumps(report["variants"][name]), flush=True)
-    text = json.dumps(report, indent=1)
-    print(text)
-    if args.out:
-        args.out.write_text(text + "\n")
+    emit(report, args.out)
 
 
 if __name__ == "__main__":

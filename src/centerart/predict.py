@@ -116,7 +116,7 @@ def run_predict(cfg: PredictConfig) -> dict:
     from centerart.inference.predictor import Predictor
 
     rgb, depth, camera, sources = resolve_inputs(cfg)
-    check_inputs(rgb, depth, camera)  # before loading any model: a bad input is reported at once
+    depth = check_inputs(rgb, depth, camera)  # before loading any model: a bad input is reported at once
     predictor = Predictor(cfg.encoder, cfg.decoder, cfg.device, cfg.predictor)
     preds = predictor.predict(rgb, depth, camera)
     out = Path(cfg.out)

@@ -26,11 +26,13 @@ class CollisionFilterConfig:
     max_points: int = 10
 
 
-def collision_free(grasps: np.ndarray, points: np.ndarray, cfg: CollisionFilterConfig) -> np.ndarray:
-    """(K,) bool: which TCP poses (K, 4, 4) keep their gripper clear of ``points`` (N, 3), one frame for both."""
+def collision_free(grasps: np.ndarray, points, cfg: CollisionFilterConfig) -> np.ndarray:
+    """(K,) bool: which TCP poses (K, 4, 4) keep their gripper clear of ``points`` (N, 3), one frame for both.
+    ``points`` may be a ``cKDTree`` of them, built once for all the objects of an image."""
+    tree = points if isinstance(points, cKDTree) else cKDTree(np.asarray(points, float).reshape(-1, 3))
+    points = tree.data
     if len(grasps) == 0 or len(points) == 0:
         return np.ones(len(grasps), bool)
-    tree = cKDTree(points)
     boxes = gripper_boxes(MAX_OPENING)
     reach = max(np.linalg.norm(t[:3, 3]) + np.linalg.norm(e) / 2 for e, t in boxes)
     keep = np.ones(len(grasps), bool)
@@ -40,13 +42,9 @@ def collision_free(grasps: np.ndarray, points: np.ndarray, cfg: CollisionFilterC
             continue
         inside = np.zeros(len(near), bool)
         for extents, tcp_T_box in boxes:
-            local = (near - (pose @ tcp_T_box)[:3, 3]) @ (pose @ tcp_T_box)[:3, :3]
+            box = pose @ tcp_T_box
+            local = (near - box[:3, 3]) @ box[:3, :3]
             half = np.maximum(extents / 2 - cfg.margin_m, MIN_HALF_EXTENT_M)
             inside |= np.all(np.abs(local) < half, axis=1)
         keep[k] = inside.sum() <= cfg.max_points
     return keep
-
-
-def boxes_world(pose: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The gripper boxes at a TCP pose as (extents, pose) pairs (for pictures)."""
-    return [(e, pose @ t) for e, t in gripper_boxes(MAX_OPENING)]

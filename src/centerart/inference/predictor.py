@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from scipy.spatial import cKDTree
 
 from centerart.geometry.camera import Intrinsics, backproject_depth
 from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_shape_and_grasps
@@ -123,8 +124,9 @@ class Predictor:
         encoded = detect_objects(self.encoder.encoder, rgb, depth, camera, self.config.peak_threshold)
         self.timing = {"encoder_s": time.perf_counter() - t0, "grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
         self.last_heatmap = encoded.heatmap
-        scene_points = backproject_depth(depth, camera.K)
-        preds = [self._predict_object(d, depth, camera, scene_points) for d in encoded.detections]
+        # One search tree of the observed points for every object's grasp collision check.
+        scene = cKDTree(backproject_depth(depth, camera.K)) if self.config.collision.enabled else None
+        preds = [self._predict_object(d, depth, camera, scene) for d in encoded.detections]
         self.timing["total_s"] = time.perf_counter() - t0
         return preds
 
@@ -133,14 +135,15 @@ class Predictor:
         self.timing[key] += now - since
         return now
 
-    def _predict_object(self, det: Detection, depth, camera: Intrinsics, scene_points) -> ObjectPrediction:
+    def _predict_object(self, det: Detection, depth, camera: Intrinsics, scene) -> ObjectPrediction:
         cfg = self.config
         mesh_cfg = MeshConfig(resolution=cfg.grasp_resolution)
         grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k_grasps * 3, cfg.top_k_grasps))
         code, joint, pose, info = det.shape_code.astype(np.float32), det.joint_code, det.camera_T_object, {}
         t = time.perf_counter()
-        if cfg.refine_sdf.enabled and det.mask is not None:
-            observed = backproject_depth(depth, camera.K, mask=det.mask)
+        refining = (cfg.refine_sdf.enabled or cfg.refine.icp) and det.mask is not None
+        observed = backproject_depth(depth, camera.K, mask=det.mask) if refining else None
+        if cfg.refine_sdf.enabled and observed is not None:
             pose, code, joint, info["sdf"] = refine_sdf(
                 self.decoder.decoder, code, joint, pose, observed, cfg.refine_sdf
             )
@@ -149,14 +152,13 @@ class Predictor:
             self.decoder.decoder, code, joint, self.decoder.bounds, mesh_cfg, grasp_cfg, self.device
         )
         t = self._tick("grasps_s", t)
-        if cfg.refine.icp and det.mask is not None:
-            observed = backproject_depth(depth, camera.K, mask=det.mask)
+        if cfg.refine.icp and observed is not None:
             pose, info["icp"] = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
         t = self._tick("refine_s", t)
         grasps_cam = pose @ grasps.poses if len(grasps) else np.zeros((0, 4, 4))
         scores = grasps.scores
         if cfg.collision.enabled and len(grasps_cam):
-            keep = collision_free(grasps_cam, scene_points, cfg.collision)
+            keep = collision_free(grasps_cam, scene, cfg.collision)
             grasps_cam, scores = grasps_cam[keep], scores[keep]
         grasps_cam, scores = grasps_cam[: cfg.top_k_grasps], scores[: cfg.top_k_grasps]
         self._tick("filter_s", t)

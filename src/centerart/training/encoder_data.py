@@ -104,7 +104,7 @@ class EncoderViewDataset(Dataset):
         targets = build_targets(labels, box, self.codes, cfg.code_dim, cfg.head_stride, MAX_OBJECTS)
         item = {k: torch.from_numpy(np.asarray(v)) for k, v in targets.items()}
         item.update(rgb=rgb_t, depth=depth_t, index=torch.tensor(index))
-        item["meta"] = {"view": str(self.views[index]), "depth_kind": kind, "scale": box.scale}
+        item["meta"] = {"view": str(self.views[index]), "depth_kind": kind, "scale": box.scale, "labels": labels}
         return item
 
 

@@ -55,7 +55,7 @@ class EncoderModule(L.LightningModule):
         self.log_dict({f"val/{k}": v for k, v in terms.items()}, batch_size=bs)
         for b, meta in enumerate(batch["meta"]):
             detections = read_objects(out, batch["K"][b].cpu().numpy(), index=b)
-            labels = self.trainer.val_dataloaders.dataset.labels_of(meta["view"])
+            labels = meta["labels"]
             cfg = self.encoder.config
             box = Letterbox.fit(labels["width"], labels["height"], cfg.input_width, cfg.input_height)  # no augmentation
             for d in detections:

@@ -96,13 +96,14 @@ def _read_one(dense, centers, cell_region, cell_heat, k, peak, heat, K, mask, st
     near = (np.abs(ii - ci) <= READ_RADIUS_CELLS) & (np.abs(jj - cj) <= READ_RADIUS_CELLS)
     use = near & (cell_region == k + 1)
     use[min(ci, use.shape[0] - 1), min(cj, use.shape[1] - 1)] = True
+    sel = torch.from_numpy(use)
     wts = torch.from_numpy(np.maximum(cell_heat[use], 1e-3)).float()
     wts = wts / wts.sum()
-    vals = {name: (f[:, torch.from_numpy(use)] * wts).sum(dim=1) for name, f in dense.items()}
+    vals = {name: (f[:, sel] * wts).sum(dim=1) for name, f in dense.items()}
     cells = torch.from_numpy(centers[use]).float()
     # Translation per cell first (each cell's offset points from its own centre), then averaged.
     per_cell = object_translation(
-        cells, dense["center_offset"][:, torch.from_numpy(use)].T, dense["center_depth"][0, torch.from_numpy(use)],
+        cells, dense["center_offset"][:, sel].T, dense["center_depth"][0, sel],
         torch.as_tensor(K, dtype=torch.float32).expand(len(cells), 3, 3),
     )  # fmt: skip
     t = (per_cell * wts[:, None]).sum(0).numpy()
