@@ -1,7 +1,7 @@
 """ONNX Runtime against eager torch on the CPU for the encoder (640x480 input letterboxed to the preset) and the
 decoder MLP (a batch of query points): same outputs within tolerance? faster? Prints JSON.
 
-    pip install onnxruntime==1.31.1 onnx==1.23.2 onnxscript==0.7.2   # not project dependencies
+    # onnx and onnxruntime are project dependencies (the predictor runs the decoder with them on CPUs)
     PYTHONPATH=src python benchmarks/onnx_bench.py --threads 2 --out benchmarks/onnx_bench_result.json
 """
 

@@ -104,6 +104,11 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "centerart.commands:eval_decoder",
             "decoder shape/grasp/physics metrics per split",
         ),
+        "scenes": Command(
+            "centerart.evaluation.scene_eval:EvalScenesConfig",
+            "centerart.commands:eval_scenes",
+            "closed-loop evaluation: predicted grasps executed in physics on held-out scenes (SR, RSR, report)",
+        ),
     },
     "predict": {
         "": Command(

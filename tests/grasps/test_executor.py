@@ -135,3 +135,20 @@ def test_pybullet_gripper_matches_the_gripper_geometry():
             np.testing.assert_allclose(centre, (tcp @ tcp_T_box)[:3, 3], atol=2e-3)
             assert state is not None
     pb.disconnect(client)
+
+
+@pytest.mark.parametrize("which", ["door_bar", "drawer_bar"])
+def test_commanded_pull_carries_the_part_past_the_success_threshold(objects_dir, known_ids, which):
+    """The full-open variant: with ``pull`` the hand keeps going (no early stop at the threshold) and the joint
+    follows close to the commanded travel; without it the trial stops soon after the threshold."""
+    obj = ArticulatedObject.load(objects_dir / known_ids[which])
+    lo, hi = obj.joint_range
+    client, target, executor, pb = _world(obj, lo)
+    grasp = _handle_grasp(obj, lo)
+    travel = 0.8 * (hi - lo)
+    full = executor.execute(grasp, target, direction=1, pull=travel)
+    short = executor.execute(grasp, target, direction=1)
+    pb.disconnect(client)
+    assert full.success and short.success, (full, short)
+    assert full.displacement > 0.8 * travel, (full.displacement, travel)
+    assert short.displacement < 0.6 * travel

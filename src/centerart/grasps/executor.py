@@ -281,11 +281,16 @@ class GraspExecutor:
         return min((p[8] for p in pts), default=0.05)
 
     # ------------------------------------------------------------------ one trial
-    def execute(self, world_T_tcp: np.ndarray, target: GraspTarget, direction: int | None = None) -> GraspResult:
+    def execute(
+        self, world_T_tcp: np.ndarray, target: GraspTarget, direction: int | None = None, pull: float | None = None
+    ) -> GraspResult:
         """Execute the grasp ``world_T_tcp`` (4x4, world frame) on ``target``; see the module docstring.
 
         ``direction``: +1 open / -1 close; default :func:`commanded_direction` at the joint's current state.
         The hand follows ``target.axis_*``/``target.joint_type``; success is measured on the true joint.
+        ``pull``: commanded motion (rad or m, along ``target.joint_type``) instead of PULL_ANGLE / PULL_DISTANCE;
+        the hand then keeps going past the success threshold and stops only when both fingers lose the part
+        (the full-open variant of the evaluation).
         """
         import pybullet as pb
 
@@ -308,7 +313,7 @@ class GraspExecutor:
         steps += self._close()  # 3. close
         if not any(self._fingers_touching(target)):
             return result(False, "no_contact", steps)
-        steps += self._pull(target, direction, q_start)  # 4. move the part
+        steps += self._pull(target, direction, q_start, pull)  # 4. move the part
         moved = direction * (target.joint_state() - q_start)
         if moved < success_threshold(target.joint_type):
             return result(False, "", steps)
@@ -353,12 +358,13 @@ class GraspExecutor:
             pb.stepSimulation(physicsClientId=self.client)
         return CLOSE_STEPS
 
-    def _pull(self, target: GraspTarget, direction: int, q_start: float) -> int:
+    def _pull(self, target: GraspTarget, direction: int, q_start: float, pull: float | None = None) -> int:
         """Move the grasping hand along the (possibly predicted) joint motion of ``target``; returns the steps.
 
         Revolute: rotate the hand about the hinge line by up to PULL_ANGLE (rad); prismatic: translate it along the
         axis by up to PULL_DISTANCE (m); the TCP moves at PULL_SPEED (m/s). Stops early once the true joint is
-        clearly past the success threshold.
+        clearly past the success threshold. With ``pull`` (rad or m): move that far instead, stopping early only
+        when no finger touches the moving part any more.
         """
         import pybullet as pb
 
@@ -368,10 +374,10 @@ class GraspExecutor:
         if target.joint_type == "revolute":
             rel = tcp - origin
             radius = float(np.linalg.norm(rel - axis * (rel @ axis)))
-            total = PULL_ANGLE
+            total = PULL_ANGLE if pull is None else pull
             rate = PULL_SPEED / max(radius, PULL_MIN_RADIUS)
         else:
-            total, rate = PULL_DISTANCE, PULL_SPEED
+            total, rate = (PULL_DISTANCE if pull is None else pull), PULL_SPEED
         n_pull = max(1, int(np.ceil(total / rate / self.dt)))
         needed = success_threshold(target.joint_type)
         hand_pos, hand_orn = grasped_hand[:3, 3], quat_from_matrix(grasped_hand[:3, :3])
@@ -389,8 +395,12 @@ class GraspExecutor:
             self.gripper.move_to(pos, orn)
             pb.stepSimulation(physicsClientId=self.client)
             steps += 1
-            # Stop once clearly past the threshold (saves time); the grip is checked by the caller.
-            if k % 8 == 0 and direction * (target.joint_state() - q_start) >= 1.25 * needed:
+            if k % 8:
+                continue
+            if pull is None:  # stop once clearly past the threshold (saves time); the caller checks the grip
+                if direction * (target.joint_state() - q_start) >= 1.25 * needed:
+                    break
+            elif not any(self._fingers_touching(target)):  # the grasp slipped off: nothing more will move
                 break
         return steps
 

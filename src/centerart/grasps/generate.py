@@ -75,13 +75,20 @@ def state_values(obj: ArticulatedObject, n: int) -> np.ndarray:
 
 def label_state(obj: ArticulatedObject, k: int, cfg: GenerateGraspsConfig) -> tuple[StateLabels, dict]:
     """Labels and statistics of object ``obj`` at state index ``k`` (see the module docstring)."""
+    q = float(state_values(obj, cfg.states)[k])
+    return label_joint_state(obj, q, item_rng(cfg.seed, obj.object_id, k), cfg, state_index=k)
+
+
+def label_joint_state(
+    obj: ArticulatedObject, q: float, rng: np.random.Generator, cfg: GenerateGraspsConfig, state_index: int = -1
+) -> tuple[StateLabels, dict]:
+    """Labels and statistics of ``obj`` at joint state ``q`` (metric), candidates from ``rng``, budgets from ``cfg``;
+    the evaluation calls it at a test scene's exact state (``state_index`` -1: not one of the grid's)."""
     import pybullet as pb
 
     from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
 
-    q = float(state_values(obj, cfg.states)[k])
     started, cpu_started = time.perf_counter(), time.process_time()
-    rng = item_rng(cfg.seed, obj.object_id, k)
     client = connect()
     try:
         target = spawn_object_in_pybullet(client, obj, q)
@@ -90,8 +97,7 @@ def label_state(obj: ArticulatedObject, k: int, cfg: GenerateGraspsConfig) -> tu
         sampler = CandidateSampler(obj, q, rng)
         back = make_pose(translation=[0.0, 0.0, -ex.APPROACH_DISTANCE])
         ok_poses, ok_disp, bad_poses, bad_disp = [], [], [], []
-        outcomes: Counter = Counter()
-        sources_ok: Counter = Counter()
+        outcomes, sources_ok = Counter(), Counter()
         drawn = trials = 0
         sim_seconds = 0.0
         while len(ok_poses) < cfg.per_state and trials < cfg.max_trials and drawn < cfg.max_candidates:
@@ -123,7 +129,7 @@ def label_state(obj: ArticulatedObject, k: int, cfg: GenerateGraspsConfig) -> tu
         pb.disconnect(client)
     labels = StateLabels(
         object_id=obj.object_id,
-        state_index=k,
+        state_index=state_index,
         q=q,
         q_normalized=float(obj.normalize(q)),
         joint_type=obj.joint_type,
@@ -137,7 +143,7 @@ def label_state(obj: ArticulatedObject, k: int, cfg: GenerateGraspsConfig) -> tu
     stats = {
         "object_id": obj.object_id,
         "category": obj.category,
-        "state_index": k,
+        "state_index": state_index,
         "q": q,
         "joint_type": obj.joint_type,
         "direction": direction,

@@ -10,7 +10,10 @@ Contents (a plain dict, loadable with ``torch.load(weights_only=True)``):
 - ``bounds`` (2, 3): the axis-aligned box (object canonical frame, m) of the training samples' surface points,
   padded; reconstruction evaluates the network inside it;
 - ``split``: which objects/states were held out for validation; ``train_config``: the training config;
-  ``metrics``: final validation numbers; ``code_version``.
+  ``metrics``: final validation numbers; ``code_version``;
+- ``training_objects``: content fingerprint (:mod:`centerart.assets.fingerprint`) of every object whose data
+  trained it, by object id (None where the folder was not found); the scene evaluation refuses test objects
+  that share one.
 """
 
 from __future__ import annotations
@@ -58,6 +61,7 @@ def save_checkpoint(
     split: dict,
     train_config: dict,
     metrics: dict | None = None,
+    training_objects: dict[str, str | None] | None = None,
 ) -> Path:
     from centerart.utils.manifest import code_version
 
@@ -73,6 +77,7 @@ def save_checkpoint(
         "train_config": train_config,
         "metrics": metrics or {},
         "code_version": code_version(),
+        "training_objects": dict(training_objects or {}),
     }
     return write_blob(path, blob)
 

@@ -219,6 +219,19 @@ def _final_metrics(cfg: TrainDecoderConfig, trainer, module, val_loader, data: _
     return metrics
 
 
+def training_object_fingerprints(data: Path, object_ids: list[str]) -> dict[str, str | None]:
+    """Fingerprints of the training objects, found through the SDF data's manifest (its ``objects`` folder)."""
+    from centerart.assets.fingerprint import fingerprint_folders
+
+    try:
+        objects = Path(json.loads((data / "manifest.json").read_text())["config"]["objects"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return dict.fromkeys(object_ids)
+    if (objects / "mobility.urdf").is_file():  # one object folder
+        return fingerprint_folders({oid: objects for oid in object_ids if oid == objects.name})
+    return fingerprint_folders({oid: objects / oid for oid in object_ids})
+
+
 def _export(cfg: TrainDecoderConfig, out: Path, module, data: _Data, lcfg: LossConfig, metrics: dict) -> dict:
     """Write ``decoder.pt`` (CPU weights, codes, bounds, split, config, metrics) and ``metrics.json``."""
     from centerart.models.checkpoint import save_checkpoint
@@ -233,6 +246,7 @@ def _export(cfg: TrainDecoderConfig, out: Path, module, data: _Data, lcfg: LossC
         data.split.to_dict(),
         json.loads(json.dumps({**asdict(cfg), "loss": asdict(lcfg)}, default=str)),
         metrics,
+        training_objects=training_object_fingerprints(Path(cfg.data), data.split.train_objects),
     )
     atomic_write_json(out / "metrics.json", metrics)
     return {"checkpoint": path, "metrics": metrics, "split": data.split}

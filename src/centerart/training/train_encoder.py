@@ -70,6 +70,20 @@ class TrainEncoderConfig:
         return replace(PRESETS[self.preset], **{**self.encoder_overrides, "code_dim": code_dim})
 
 
+def scene_object_fingerprints(views: list[Path]) -> dict[str, str | None]:
+    """Fingerprint of every object in the scenes of ``views`` (their ``scene.json`` names the asset folders)."""
+    from centerart.assets.fingerprint import fingerprint_folders
+    from centerart.scenes.description import SceneDescription
+
+    folders = {}
+    for scene_file in sorted({Path(v).parent.parent / "scene.json" for v in views}):
+        for spec in SceneDescription.load(scene_file).objects:
+            # Ids are not identities (a seed-0 and a seed-9000 cabinet_0000 differ): keep both under two keys.
+            same = folders.get(spec.object_id, spec.path) == spec.path
+            folders[spec.object_id if same else f"{spec.object_id}@{spec.path}"] = spec.path
+    return fingerprint_folders(folders)
+
+
 def _loaders(cfg: TrainEncoderConfig, enc_cfg: EncoderConfig, codes: dict):
     from torch.utils.data import DataLoader
 
@@ -153,6 +167,9 @@ def train_encoder(cfg: TrainEncoderConfig) -> dict:
     metrics["resumed"] = bool(resumed)
     # A resumed run's global step counts earlier runs' steps too: no honest rate without the restored step count.
     metrics["train_images_per_second"] = None if resumed else images / max(seconds, 1e-9)
-    path = save_encoder(out / "encoder.pt", module.encoder.cpu(), decoder_path, sorted(codes), config_dict, metrics)
+    trained_on = scene_object_fingerprints(train_loader.dataset.views)
+    path = save_encoder(
+        out / "encoder.pt", module.encoder.cpu(), decoder_path, sorted(codes), config_dict, metrics, trained_on
+    )
     atomic_write_json(out / "metrics.json", metrics)
     return {"checkpoint": path, "metrics": metrics}

@@ -2,7 +2,8 @@
 
 Contents (a plain dict): ``format`` ``"centerart-rgbd-encoder"``, ``version`` 1, ``encoder_config`` (JSON-able
 dict), ``state_dict``, ``decoder`` (``sha256`` of the decoder checkpoint whose shape codes were the targets,
-its ``object_ids`` and ``code_dim``), ``train_config``, ``metrics``, ``code_version``. Training also writes the
+its ``object_ids`` and ``code_dim``), ``train_config``, ``metrics``, ``code_version``, ``training_objects``
+(content fingerprint of every object in the training scenes, by id). Training also writes the
 config as JSON beside it. The decoder link matters: shape codes only mean something to the decoder they came from,
 so :func:`load_encoder` refuses a different decoder with a clear error.
 """
@@ -38,7 +39,7 @@ def file_sha256(path: Path) -> str:
 
 def save_encoder(
     path: Path, encoder: RGBDEncoder, decoder_path: Path, decoder_object_ids: list[str], train_config: dict,
-    metrics: dict | None = None,
+    metrics: dict | None = None, training_objects: dict[str, str | None] | None = None,
 ) -> Path:  # fmt: skip
     from centerart.utils.manifest import code_version
 
@@ -56,6 +57,7 @@ def save_encoder(
         "train_config": train_config,
         "metrics": metrics or {},
         "code_version": code_version(),
+        "training_objects": dict(training_objects or {}),
     }
     return write_blob(path, blob)
 

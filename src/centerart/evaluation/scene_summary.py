@@ -1,0 +1,158 @@
+"""Aggregate scene-evaluation rows into the report's numbers: per test set x method x depth mode, per category,
+errors, detection, latency, and where the failures come from.
+
+Every rate counts every ground-truth object of its group in its denominator (misses and aborts are failures);
+a rate is None only where a method does not define it (SR-axis of the oracle and the baseline).
+"""
+
+from __future__ import annotations
+
+from collections import Counter, defaultdict
+
+import numpy as np
+
+from centerart.evaluation.metrics import distance_distribution
+
+
+def rate(rows: list[dict], key: str) -> float | None:
+    vals = [bool(r[key]) for r in rows if r.get(key) is not None]
+    return float(np.mean(vals)) if vals else None
+
+
+def _median(values) -> float | None:
+    values = [v for v in values if v is not None and np.isfinite(v)]
+    return float(np.median(values)) if values else None
+
+
+def _mean(values) -> float | None:
+    values = [v for v in values if v is not None and np.isfinite(v)]
+    return float(np.mean(values)) if values else None
+
+
+def full_open_summary(rows: list[dict]) -> dict | None:
+    """Full-open variant over the objects the protocol opens, for methods that predict an axis; an object whose
+    grasp never ran (missed, no grasp) counts as not reached."""
+    applicable = [r for r in rows if r.get("opens") and r.get("sr_axis") is not None]
+    if not applicable:
+        return None
+    runs = [r["full_open"] for r in applicable if r.get("full_open")]
+    return {
+        "objects": len(applicable),
+        "reached_share": float(np.mean([bool(r.get("full_open") and r["full_open"]["reached"]) for r in applicable])),
+        "fraction_of_range_mean": _mean([x["fraction_of_range"] for x in runs]),
+        "covered_mean": _mean([x["covered"] for x in runs]),
+    }
+
+
+def error_summary(rows: list[dict]) -> dict | None:
+    errs = [r["errors"] for r in rows if r.get("errors")]
+    if not errs:
+        return None
+    rev = [e for e in errs if e["joint_type"] == "revolute"]
+    pri = [e for e in errs if e["joint_type"] == "prismatic"]
+    shapes = [r["shape"] for r in rows if r.get("shape")]
+    return {
+        "matched": len(errs),
+        "translation_cm_median": _median(e["translation_cm"] for e in errs),
+        "rotation_deg_median": _median(e["rotation_deg"] for e in errs),
+        "joint_type_accuracy": float(np.mean([e["joint_type_correct"] for e in errs])),
+        "axis_deg_median": _median(e["axis_deg"] for e in errs),
+        "joint_state_deg_median": _median(e["joint_state_error"] for e in rev),
+        "joint_state_cm_median": _median(e["joint_state_error"] for e in pri),
+        "chamfer_mm_mean": _mean(s["chamfer_l1_mm"] for s in shapes),
+        "chamfer_mm_median": _median(s["chamfer_l1_mm"] for s in shapes),
+        "fscore_mean": _mean(s["fscore"] for s in shapes),
+        "shapes": len(shapes),
+    }
+
+
+def group_summary(rows: list[dict]) -> dict:
+    nearest = np.array([np.inf if r.get("nearest_label_m") is None else r["nearest_label_m"] for r in rows])
+    by_cat = defaultdict(list)
+    for r in rows:
+        by_cat[r["category"]].append(r)
+    return {
+        "objects": len(rows),
+        "sr": rate(rows, "sr"),
+        "sr_axis": rate(rows, "sr_axis"),
+        "rsr": rate(rows, "rsr"),
+        "top5_any": rate(rows, "top5_any"),
+        "matched_share": rate(rows, "matched"),
+        "full_open": full_open_summary(rows),
+        "aborts": dict(sorted(Counter(r["sr_abort"] or "success" for r in rows).items())),
+        "nearest_label": distance_distribution(nearest),
+        "errors": error_summary(rows),
+        "by_category": {
+            c: {"objects": len(rs), "sr": rate(rs, "sr"), "sr_axis": rate(rs, "sr_axis"), "rsr": rate(rs, "rsr")}
+            for c, rs in sorted(by_cat.items())
+        },
+    }
+
+
+def image_summary(images: list[dict]) -> dict:
+    """Detection precision / recall (3-D centre match) and latency per image of one group."""
+    c = Counter()
+    for im in images:
+        c.update({k: v for k, v in im["counts"].items() if isinstance(v, int)})
+    totals = [im["timing_s"].get("total_s") for im in images]
+    return {
+        "images": len(images),
+        "precision": c["true_positives"] / c["predictions"] if c["predictions"] else None,
+        "recall": c["found"] / c["true_objects"] if c["true_objects"] else None,
+        "latency_s_median": _median(totals),
+        "latency_s_mean": _mean(totals),
+    }
+
+
+STAGES = ("detection", "pose_and_joint", "shape_and_grasp_decoding", "execution")
+
+
+def stage_losses(rows: list[dict], oracle_rows: list[dict]) -> dict | None:
+    """Where the learned method's failures come from, by swapping in ground truth one stage at a time:
+    detection (missed), pose and joint (the true pose and state make the grasp succeed), shape and grasp
+    decoding (still failing with them, while a ground-truth label succeeds), execution (the label fails too)."""
+    if not rows or not any("sr_gt_pose" in r for r in rows):
+        return None
+    oracle = {(r["scene"], r["view"], r["instance"]): r["sr"] for r in oracle_rows}
+    out = Counter()
+    for r in rows:
+        if r["sr"]:
+            continue
+        if not r["matched"]:
+            out["detection"] += 1
+        elif r.get("sr_gt_pose"):
+            out["pose_and_joint"] += 1
+        elif oracle.get((r["scene"], r["view"], r["instance"]), True):
+            out["shape_and_grasp_decoding"] += 1
+        else:
+            out["execution"] += 1
+    n = len(rows)
+    return {
+        "objects": n,
+        "sr": rate(rows, "sr"),
+        "sr_with_true_pose_and_joint": float(np.mean([bool(r["sr"] or r.get("sr_gt_pose")) for r in rows])),
+        "failures_by_stage": {k: out[k] for k in STAGES},
+        "failure_share_by_stage": {k: out[k] / n for k in out},
+    }
+
+
+def summarize_records(records: list[dict]) -> dict:
+    """Groups keyed ``set|method|depth`` with their summaries, plus the stage analysis per ``set|depth``."""
+    rows_by, images_by = defaultdict(list), defaultdict(list)
+    for rec in records:
+        for r in rec["rows"]:
+            rows_by[(rec["set"], r["method"], r["depth"])].append(r)
+        for im in rec["images"]:
+            images_by[(rec["set"], im["method"], im["depth"])].append(im)
+    groups = {}
+    for key, rows in sorted(rows_by.items()):
+        g = group_summary(rows)
+        if key in images_by:
+            g["detection"] = image_summary(images_by[key])
+        groups["|".join(key)] = g
+    stages = {}
+    for (s, method, depth), rows in sorted(rows_by.items()):
+        loss = stage_losses(rows, rows_by.get((s, "oracle", depth), []))
+        if loss is not None:
+            stages[f"{s}|{method}|{depth}"] = loss
+    return {"groups": groups, "stages": stages}

@@ -1,0 +1,128 @@
+"""Pictures of a scene evaluation (``centerart eval scenes``): SR per category, the distribution of the distance
+from the top grasp to the nearest label, and a contact sheet of the worst failures with the executed grasp drawn
+(red: the learned method's top grasp; green: the ground-truth label the oracle executed)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from centerart.viz.contact_sheet import grid, labelled, save_png
+from centerart.viz.prediction_overlay import draw_grasps
+
+MAX_FAILURES = 12
+THUMB_WIDTH = 400
+
+
+def _records(out: Path, report: dict) -> list[dict]:
+    records = []
+    for name in report["sets"]:
+        folder = Path(out) / "records" / name
+        records += [json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))] if folder.is_dir() else []
+    return records
+
+
+def plot_sr_by_category(report: dict, path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups = {k: g for k, g in report["groups"].items() if g["sr"] is not None}
+    cats = sorted({c for g in groups.values() for c in g["by_category"]})
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(cats) + 2), 4.0), dpi=110)
+    width = 0.8 / max(1, len(groups))
+    for i, (key, g) in enumerate(groups.items()):
+        vals = [(g["by_category"].get(c) or {}).get("sr") or 0.0 for c in cats]
+        ax.bar(np.arange(len(cats)) + i * width, vals, width, label=key)
+    ax.set_xticks(np.arange(len(cats)) + 0.4 - width / 2, cats, rotation=15)
+    ax.set_ylim(0, 1)
+    ax.set_ylabel("SR (top grasp executed)")
+    ax.legend(fontsize=6, ncol=2)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def plot_nearest_label(records: list[dict], path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    by = {}
+    for rec in records:
+        for r in rec["rows"]:
+            if r["method"] != "oracle":
+                d = r.get("nearest_label_m")
+                by.setdefault(f"{rec['set']}|{r['method']}|{r['depth']}", []).append(np.inf if d is None else d)
+    fig, ax = plt.subplots(figsize=(6.5, 4.0), dpi=110)
+    for key, d in sorted(by.items()):
+        d = np.sort(np.asarray(d))
+        ax.step(d, np.arange(1, len(d) + 1) / len(d), where="post", label=key)
+    ax.axvline(0.03, color="k", ls="--", lw=0.8)
+    ax.set_xlim(0, 0.5)
+    ax.set_ylim(0, 1)
+    ax.set_xlabel("top grasp to nearest ground-truth label (m); dashed: RSR threshold")
+    ax.set_ylabel("share of objects")
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def failure_tile(folder: Path, row: dict, oracle: dict | None) -> np.ndarray:
+    from PIL import Image
+
+    view_dir = Path(folder) / row["scene"] / "views" / f"{row['view']:02d}"
+    rgb = np.asarray(Image.open(view_dir / "rgb.png").convert("RGB")).copy()
+    K = np.asarray(json.loads((view_dir / "labels.json").read_text())["K"], float)
+    mask = np.asarray(Image.open(view_dir / "instances.png")) == row["instance"] + 1
+    contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    cv2.drawContours(rgb, contours, -1, (255, 255, 0), 2)
+    if oracle and oracle.get("grasp_camera"):
+        draw_grasps(rgb, np.asarray([oracle["grasp_camera"]]), K, (40, 220, 40), top_k=1)
+    if row.get("grasp_camera"):
+        draw_grasps(rgb, np.asarray([row["grasp_camera"]]), K, (230, 30, 30), top_k=1)
+    scale = THUMB_WIDTH / rgb.shape[1]
+    rgb = cv2.resize(rgb, (THUMB_WIDTH, round(rgb.shape[0] * scale)), interpolation=cv2.INTER_AREA)
+    d = row.get("nearest_label_m")
+    text = (f"{row['scene']} {row['category']} {row['depth']}: {row['sr_abort']}"
+            + (f", {100 * d:.0f} cm from a label" if d is not None else ""))  # fmt: skip
+    return labelled(rgb, text, 11)
+
+
+def plot_failures(out: Path, report: dict, records: list[dict], path: Path) -> Path | None:
+    """Contact sheet of the learned method's worst failures: matched objects whose top grasp lay furthest from
+    every label first, then misses."""
+    oracle = {(rec["set"], r["scene"], r["view"], r["instance"]): r for rec in records for r in rec["rows"]
+              if r["method"] == "oracle"}  # fmt: skip
+    fails = [(rec["set"], r) for rec in records for r in rec["rows"] if r["method"].startswith("centerart")]
+    fails = [(s, r) for s, r in fails if not r["sr"]]
+    if not fails:
+        return None
+    fails.sort(key=lambda sr: (not sr[1]["matched"], -(sr[1].get("nearest_label_m") or 0.0)))
+    tiles = [
+        failure_tile(Path(report["sets"][s]["folder"]), r, oracle.get((s, r["scene"], r["view"], r["instance"])))
+        for s, r in fails[:MAX_FAILURES]
+    ]
+    h = max(t.shape[0] for t in tiles)
+    tiles = [np.pad(t, ((0, h - t.shape[0]), (0, 0), (0, 0)), constant_values=255) for t in tiles]
+    rows = [tiles[i : i + 4] for i in range(0, len(tiles), 4)]
+    return save_png(grid(rows), path)
+
+
+def draw_eval_pictures(out: Path, report: dict) -> list[Path]:
+    """Write ``plots/sr_by_category.png``, ``plots/nearest_label.png`` and ``failures.png`` under ``out``."""
+    out = Path(out)
+    records = _records(out, report)
+    written = [plot_sr_by_category(report, out / "plots" / "sr_by_category.png")]
+    written.append(plot_nearest_label(records, out / "plots" / "nearest_label.png"))
+    sheet = plot_failures(out, report, records, out / "failures.png")
+    return written + ([sheet] if sheet else [])
