@@ -149,13 +149,14 @@ def eval_decoder(cfg) -> None:
 
 def eval_scenes(cfg) -> None:
     from centerart.evaluation.scene_eval import evaluate_scenes
+    from centerart.evaluation.scene_report import group_label
     from centerart.viz.eval_report import draw_eval_pictures
 
     report = evaluate_scenes(cfg)
     draw_eval_pictures(Path(cfg.out), report)
     for key, g in report["groups"].items():
         rates = f"SR {_rate(g['sr'])}  SR-axis {_rate(g['sr_axis'])}  RSR {_rate(g['rsr'])}"
-        print(f"{key:48s} objects {g['objects']:4d}  {rates}")
+        print(f"{group_label(report, key):40s} objects {g['objects']:4d}  {rates}")
     if report["scenes_missing"]:
         print(f"{len(report['scenes_missing'])} scenes not evaluated yet: rerun the same command to finish")
     print(f"wrote {Path(cfg.out) / 'report.md'} and report.json")

@@ -62,6 +62,19 @@ def set_summary(s: dict) -> dict:
     return {"folder": s["folder"], "layout": s["layout"], "objects": len(s["objects"]), "scenes": len(s["scenes"])}
 
 
+def set_labels(keys) -> dict[str, str]:
+    """Readable set names for tables: the folder name (``set_key`` minus its path hash) unless two sets share it."""
+    names = {k: k.rsplit("-", 1)[0] for k in keys}
+    return {k: n if list(names.values()).count(n) == 1 else k for k, n in names.items()}
+
+
+def group_label(report: dict, key: str) -> str:
+    """A group key ``set|method|depth`` as the tables show it."""
+    parts = key.split("|")
+    parts[0] = report["sets"].get(parts[0], {}).get("label", parts[0])
+    return " / ".join(parts)
+
+
 def write_report(out: Path, job_cfg: dict, sets: dict[str, list[Path]], testset: dict, run: dict) -> dict:
     from centerart.utils.manifest import code_version
 
@@ -75,7 +88,7 @@ def write_report(out: Path, job_cfg: dict, sets: dict[str, list[Path]], testset:
         "held_out": testset["held_out"],
         "training_overlap": testset["training_overlap"],
         "thresholds": all_thresholds(),
-        "sets": {n: set_summary(s) for n, s in testset["sets"].items()},
+        "sets": {n: {**set_summary(s), "label": set_labels(testset["sets"])[n]} for n, s in testset["sets"].items()},
         "scenes_evaluated": len(records),
         "scenes_missing": missing,
         "images": sum(len({(r["scene"], im["view"]) for im in r["images"]}) for r in records),
@@ -106,7 +119,7 @@ def table_i(report: dict) -> list[str]:
         for m in _methods(g, name):
             t, r = g.get(f"{name}|{m}|true", {}), g.get(f"{name}|{m}|realistic", {})
             lines.append(
-                f"| {name} | {s['layout']} | {m} | {_f(t.get('sr'))} | {_f(t.get('rsr'))} | {_f(r.get('sr'))} | "
+                f"| {s['label']} | {s['layout']} | {m} | {_f(t.get('sr'))} | {_f(t.get('rsr'))} | {_f(r.get('sr'))} | "
                 f"{_f(r.get('rsr'))} | {t.get('objects', r.get('objects', 0))} |"
             )
     for (layout, method), (gt, noisy) in PAPER_TABLE_I.items():
@@ -121,8 +134,9 @@ def variants_table(report: dict) -> list[str]:
     for key, g in report["groups"].items():
         fo = g.get("full_open") or {}
         lines.append(
-            f"| {key} | {g['objects']} | {_f(g['matched_share'])} | {_f(g['sr'])} | {_f(g['sr_axis'])} | "
-            f"{_f(g['top5_any'])} | {_f(fo.get('reached_share'))} | {_f(fo.get('fraction_of_range_mean'))} |"
+            f"| {group_label(report, key)} | {g['objects']} | {_f(g['matched_share'])} | {_f(g['sr'])} | "
+            f"{_f(g['sr_axis'])} | {_f(g['top5_any'])} | {_f(fo.get('reached_share'))} | "
+            f"{_f(fo.get('fraction_of_range_mean'))} |"
         )
     return lines
 
@@ -131,7 +145,10 @@ def category_table(report: dict) -> list[str]:
     lines = ["| group | category | objects | SR | SR-axis | RSR |", "|---|---|---|---|---|---|"]
     for key, g in report["groups"].items():
         for cat, c in g["by_category"].items():
-            lines.append(f"| {key} | {cat} | {c['objects']} | {_f(c['sr'])} | {_f(c['sr_axis'])} | {_f(c['rsr'])} |")
+            lines.append(
+                f"| {group_label(report, key)} | {cat} | {c['objects']} | {_f(c['sr'])} | {_f(c['sr_axis'])} | "
+                f"{_f(c['rsr'])} |"
+            )
     return lines
 
 
@@ -145,7 +162,8 @@ def error_table(report: dict) -> list[str]:
             continue
         e, d = e or {}, d or {}
         lines.append(
-            f"| {key} | {_f(d.get('precision'))} | {_f(d.get('recall'))} | {e.get('matched', 0)} | "
+            f"| {group_label(report, key)} | {_f(d.get('precision'))} | {_f(d.get('recall'))} | "
+            f"{e.get('matched', 0)} | "
             f"{_f(e.get('translation_cm_median'), 1)} | {_f(e.get('rotation_deg_median'), 1)} | "
             f"{_f(e.get('joint_type_accuracy'))} | {_f(e.get('axis_deg_median'), 1)} | "
             f"{_f(e.get('joint_state_deg_median'), 1)} / {_f(e.get('joint_state_cm_median'), 1)} | "
@@ -161,8 +179,8 @@ def stage_table(report: dict) -> list[str]:
     for key, s in report["stages"].items():
         f = s["failures_by_stage"]
         lines.append(
-            f"| {key} | {s['objects']} | {_f(s['sr'])} | {_f(s['sr_with_true_pose_and_joint'])} | {f['detection']} | "
-            f"{f['pose_and_joint']} | {f['shape_and_grasp_decoding']} | {f['execution']} |"
+            f"| {group_label(report, key)} | {s['objects']} | {_f(s['sr'])} | {_f(s['sr_with_true_pose_and_joint'])} | "
+            f"{f['detection']} | {f['pose_and_joint']} | {f['shape_and_grasp_decoding']} | {f['execution']} |"
         )
     return lines
 
@@ -173,7 +191,9 @@ def abort_lines(report: dict) -> list[str]:
         near = g["nearest_label"]
         q = ", ".join(f"{k}: {_f(v, 3)}" for k, v in near["quantiles_m"].items())
         aborts = ", ".join(f"{k} {v}" for k, v in g["aborts"].items())
-        lines.append(f"- **{key}**: outcomes of the top grasp: {aborts}. Nearest label (m) quantiles {q}.")
+        lines.append(
+            f"- **{group_label(report, key)}**: outcomes of the top grasp: {aborts}. Nearest label (m) quantiles {q}."
+        )
     return lines
 
 
