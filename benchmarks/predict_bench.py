@@ -37,10 +37,14 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--icp", action="store_true")
     ap.add_argument("--device", default="cpu")
+    ap.add_argument("--runtime", choices=["auto", "torch", "onnxruntime"], default="auto")
+    ap.add_argument("--no-batch", action="store_true", help="decode objects one after the other")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
-    cfg = replace(PredictorConfig(), refine=RefineConfig(icp=args.icp))
+    cfg = replace(
+        PredictorConfig(), refine=RefineConfig(icp=args.icp), runtime=args.runtime, batch_objects=not args.no_batch
+    )
     predictor = Predictor(device=args.device, config=cfg)
     views = collect_views(args.scenes)
     step = max(1, len(views) // (args.views + 1))
@@ -50,8 +54,7 @@ def main() -> None:
         preds = predictor.predict(v.rgb, v.depth_realistic, np.asarray(v.labels["K"]))
         timing = dict(predictor.timing)
         t0 = time.perf_counter()
-        for p in preds:
-            p.mesh()
+        predictor.meshes(preds)
         timing["meshes_s"] = time.perf_counter() - t0
         if k > 0:
             rows.append({"objects": len(preds), **timing})
@@ -65,7 +68,12 @@ def main() -> None:
         "threads": args.threads,
         "device": args.device,
         "image": f"{v.labels['width']}x{v.labels['height']}",
-        "config": {"grasp_resolution": cfg.grasp_resolution, "mesh_resolution": cfg.mesh_resolution, "icp": args.icp},
+        "config": {
+            "grasp_resolution": cfg.grasp_resolution,
+            "mesh_resolution": cfg.mesh_resolution,
+            "icp": args.icp,
+            "decoder_runtime": type(predictor.fast_decoder).__name__,
+        },
         "median_seconds_by_objects_found": groups,
         "per_image": rows,
     }

@@ -80,7 +80,7 @@ def write_outputs(tmp: Path, predictor, preds, rgb, depth, camera, cfg: PredictC
     from centerart.viz.scenes_sheet import heatmap_image
 
     t0 = time.perf_counter()
-    meshes = [p.mesh() for p in preds] if cfg.meshes else []
+    meshes = predictor.meshes(preds) if cfg.meshes else []
     timing = {**predictor.timing, "meshes_s": time.perf_counter() - t0}
     mesh_files = {}
     for k, mesh in enumerate(meshes):

@@ -21,6 +21,7 @@ from scipy.spatial import cKDTree
 
 from centerart.errors import CenterArtError
 from centerart.geometry.camera import Intrinsics, backproject_depth
+from centerart.inference.batched_decoder import run_batched
 from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_shape_and_grasps
 from centerart.inference.grasp_filter import CollisionFilterConfig, collision_free
 from centerart.inference.inputs import check_inputs
@@ -45,6 +46,8 @@ class PredictorConfig:
     refine_sdf: SdfRefineConfig = field(default_factory=SdfRefineConfig)
     """Pose, shape code and joint code fitted to the observed depth through the decoder (before grasps)."""
     collision: CollisionFilterConfig = field(default_factory=CollisionFilterConfig)
+    batch_objects: bool = True
+    """Decode all objects of an image at once (their decoder calls merged into shared batches)."""
     runtime: Literal["auto", "torch", "onnxruntime"] = "auto"
     """What runs the decoder for grasps and meshes: onnxruntime (CPU only, about twice as fast as torch there),
     torch, or auto (onnxruntime on a CPU when installed, else torch). SDF refinement always uses torch."""
@@ -146,7 +149,7 @@ class Predictor:
         self.last_heatmap = encoded.heatmap
         # One search tree of the observed points for every object's grasp collision check.
         scene = cKDTree(backproject_depth(depth, camera.K)) if self.config.collision.enabled else None
-        preds = [self._predict_object(d, depth, camera, scene) for d in encoded.detections]
+        preds = self._predict_objects(encoded.detections, depth, camera, scene)
         self.timing["total_s"] = time.perf_counter() - t0
         return preds
 
@@ -158,30 +161,54 @@ class Predictor:
         depth = check_inputs(np.asarray(rgb), np.asarray(depth), camera)
         self.timing = {"grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
         scene = cKDTree(backproject_depth(depth, camera.K)) if self.config.collision.enabled else None
-        return self._predict_object(det, depth, camera, scene)
+        return self._predict_objects([det], depth, camera, scene)[0]
 
     def _tick(self, key: str, since: float) -> float:
         now = time.perf_counter()
         self.timing[key] += now - since
         return now
 
-    def _predict_object(self, det: Detection, depth, camera: Intrinsics, scene) -> ObjectPrediction:
-        cfg = self.config
-        mesh_cfg = MeshConfig(resolution=cfg.grasp_resolution)
-        grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k_grasps * 3, cfg.top_k_grasps))
-        code, joint, pose, info = det.shape_code.astype(np.float32), det.joint_code, det.camera_T_object, {}
+    def _predict_objects(self, dets: list[Detection], depth, camera: Intrinsics, scene) -> list[ObjectPrediction]:
+        """Refine (SDF fit), decode grasps of all objects at once (:mod:`~centerart.inference.batched_decoder`),
+        then per object: ICP, grasps to the camera frame, collision filter, ranking."""
         t = time.perf_counter()
+        starts = [self._refine_start(det, depth, camera) for det in dets]
+        t = self._tick("refine_s", t)
+        mesh_cfg = MeshConfig(resolution=self.config.grasp_resolution)
+        grasp_cfg = GraspExtractionConfig(top_k=self.config.top_k_grasps * 3)
+        bounds, device = self.decoder.bounds, self.device
+        tasks = [
+            (lambda dec, c=code, j=joint: predict_shape_and_grasps(dec, c, j, bounds, mesh_cfg, grasp_cfg, device))
+            for _, code, joint, _, _ in starts
+        ]
+        decoded = (
+            run_batched(self.fast_decoder, tasks)
+            if self.config.batch_objects
+            else [f(self.fast_decoder) for f in tasks]
+        )
+        self._tick("grasps_s", t)
+        return [
+            self._finish_object(det, start, recon, grasps, scene)
+            for det, start, (recon, grasps) in zip(dets, starts, decoded, strict=True)
+        ]
+
+    def _refine_start(self, det: Detection, depth, camera: Intrinsics) -> tuple:
+        """(pose, shape code, joint code, refinement info, observed points or None) of one detection, after the
+        SDF fit when it is on."""
+        cfg = self.config
+        code, joint, pose, info = det.shape_code.astype(np.float32), det.joint_code, det.camera_T_object, {}
         refining = (cfg.refine_sdf.enabled or cfg.refine.icp) and det.mask is not None
         observed = backproject_depth(depth, camera.K, mask=det.mask) if refining else None
         if cfg.refine_sdf.enabled and observed is not None:
             pose, code, joint, info["sdf"] = refine_sdf(
                 self.decoder.decoder, code, joint, pose, observed, cfg.refine_sdf
             )
-        t = self._tick("refine_s", t)
-        recon, grasps = predict_shape_and_grasps(
-            self.fast_decoder, code, joint, self.decoder.bounds, mesh_cfg, grasp_cfg, self.device
-        )
-        t = self._tick("grasps_s", t)
+        return pose, code, joint, info, observed
+
+    def _finish_object(self, det: Detection, start: tuple, recon, grasps, scene) -> ObjectPrediction:
+        cfg = self.config
+        pose, code, joint, info, observed = start
+        t = time.perf_counter()
         if cfg.refine.icp and observed is not None:
             pose, info["icp"] = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
         t = self._tick("refine_s", t)
@@ -215,10 +242,19 @@ class Predictor:
             _mesher=self._mesh,
         )
 
-    def _mesh(self, pred: ObjectPrediction, resolution: int | None):
+    def meshes(self, preds: list[ObjectPrediction], resolution: int | None = None) -> list:
+        """The complete mesh of every prediction (trimesh, camera frame), all objects decoded at once."""
+        tasks = [(lambda dec, p=p: self._mesh(p, resolution, dec)) for p in preds]
+        return (
+            run_batched(self.fast_decoder, tasks)
+            if self.config.batch_objects
+            else [f(self.fast_decoder) for f in tasks]
+        )
+
+    def _mesh(self, pred: ObjectPrediction, resolution: int | None, decoder=None):
         res = resolution or self.config.mesh_resolution
         recon = reconstruct_object(
-            self.fast_decoder, pred.shape_code, pred.joint_state_normalized, self.decoder.bounds,
+            decoder or self.fast_decoder, pred.shape_code, pred.joint_state_normalized, self.decoder.bounds,
             MeshConfig(resolution=res), self.device,
         )  # fmt: skip
         mesh = recon.mesh.copy()
