@@ -41,8 +41,10 @@ from centerart.scenes.collisions import check_scene
 from centerart.scenes.description import SceneDescription
 from centerart.scenes.layouts import AssetEntry, sample_scene
 from centerart.scenes.textures import make_texture, write_texture
-from centerart.utils.atomic import atomic_directory, atomic_write_json, remove_stale_temporaries
-from centerart.utils.manifest import write_manifest
+from centerart.utils.atomic import atomic_directory, atomic_write_json
+from centerart.utils.checks import at_least, interval, workers
+from centerart.utils.folders import check_output_folder, output_folder
+from centerart.utils.manifest import merge_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng
 
@@ -87,6 +89,15 @@ class GenerateScenesConfig:
     """Parallel worker processes (default: all cores). Each compiles SAPIEN's shaders once (a few seconds)."""
     ray_address: str | None = None
     """Ray cluster address (e.g. auto or ray://host:10001) to run scenes on a cluster instead of local processes."""
+
+    def __post_init__(self):
+        at_least("--count", self.count, 0)
+        at_least("--views-per-scene", self.views_per_scene, 1)
+        at_least("--rt-samples-per-pixel", self.rt_samples_per_pixel, 1)
+        interval("--radius-m", self.radius_m, lo=0.0, strict_lo=True)
+        interval("--elevation-deg", self.elevation_deg, lo=-90.0, hi=90.0)
+        interval("--azimuth-deg", self.azimuth_deg, lo=-180.0, hi=180.0)
+        workers("--workers", self.workers)
 
 
 # ---------------------------------------------------------------------------- asset index
@@ -252,37 +263,33 @@ def _generate_one(job: tuple) -> dict:
 
 
 def generate_scenes(cfg: GenerateScenesConfig) -> dict:
-    """Generate (or complete) the scene dataset described by ``cfg``; returns the manifest fields."""
-    if cfg.count < 0 or cfg.views_per_scene < 1:
-        raise CenterArtError("--count must be >= 0 and --views-per-scene >= 1")
+    """Generate (or complete) the scene dataset described by ``cfg``; returns the manifest fields (counts and
+    scene rows of every scene in the folder, earlier runs' included)."""
+    check_output_folder(cfg.out)
     if cfg.decoder_checkpoint is not None:
         load_decoder_shape_codes(cfg.decoder_checkpoint)  # fail early, in the parent, with a clear message
     entries = asset_index(cfg.objects)
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)
+    out = output_folder(cfg.out)
     started = time.perf_counter()
     cfg_dict = {k: v for k, v in asdict(cfg).items()}
     jobs = [(cfg_dict, i, entries) for i in range(cfg.count)]
-    records = sorted(
-        parallel_map(_generate_one, jobs, cfg.workers, desc="scenes", ray_address=cfg.ray_address),
-        key=lambda r: r["scene"],
-    )
-    images = sum(len(r.get("views", [])) for r in records)
-    fields = {
-        "seed": cfg.seed,
-        "counts": {
-            "scenes": len(records),
-            "images": images,
-            "rejected_layouts": int(sum(len(r.get("rejected", [])) for r in records)),
-            "objects_available": len(entries),
-        },
-        "wall_seconds_this_run": round(time.perf_counter() - started, 1),
-        "assets": [asdict(e) for e in entries],
-        "scenes": records,
+    records = parallel_map(_generate_one, jobs, cfg.workers, desc="scenes", ray_address=cfg.ray_address)
+    return merge_manifest(
+        out, "scenes", cfg, "scenes", list(records), key=lambda r: r["scene"],
+        summarize=lambda rows: {"counts": _counts(rows, entries)},
+        present=lambda r: (out / r["scene"] / "scene.json").is_file(),
+        seed=cfg.seed, wall_seconds_this_run=round(time.perf_counter() - started, 1),
+        assets=[asdict(e) for e in entries],
+    )  # fmt: skip
+
+
+def _counts(records: list[dict], entries: list[AssetEntry]) -> dict:
+    return {
+        "scenes": len(records),
+        "images": sum(len(r.get("views", [])) for r in records),
+        "rejected_layouts": int(sum(len(r.get("rejected", [])) for r in records)),
+        "objects_available": len(entries),
     }
-    write_manifest(out, "scenes", cfg, **fields)
-    return fields
 
 
 # ---------------------------------------------------------------------------- reading
