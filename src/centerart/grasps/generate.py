@@ -32,7 +32,7 @@ from centerart.grasps.candidates import CandidateSampler
 from centerart.grasps.labels import StateLabels, state_path
 from centerart.utils.atomic import atomic_write_json, remove_stale_temporaries
 from centerart.utils.checks import at_least, workers
-from centerart.utils.folders import output_folder
+from centerart.utils.folders import check_output_folder, output_folder
 from centerart.utils.manifest import merge_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng
@@ -204,12 +204,13 @@ def generate_grasps(cfg: GenerateGraspsConfig) -> dict:
     """Generate (or complete) the label set described by ``cfg``; returns the manifest's counts per category
     (of every item in the folder, earlier runs' included)."""
     folders = list_objects(Path(cfg.objects))
+    check_output_folder(cfg.out)
+    for f in folders:  # fail early, in this process and before writing, on objects that cannot be loaded
+        ArticulatedObject.load(f)
     out = output_folder(cfg.out)
     for sub in out.iterdir():
         if sub.is_dir():
             remove_stale_temporaries(sub)
-    for f in folders:  # fail early, in this process, on objects that cannot be loaded
-        ArticulatedObject.load(f)
     cfg_dict = {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(cfg).items()}
     items = [(str(f), k, cfg_dict) for f in folders for k in range(cfg.states)]
     rows = list(parallel_map(_job, items, cfg.workers, desc="grasp labels", ray_address=cfg.ray_address))

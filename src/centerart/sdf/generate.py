@@ -125,6 +125,16 @@ def _plan(cfg: GenerateSdfConfig) -> list[_Item]:
     return items
 
 
+def _check_inputs(items: list[_Item]) -> None:
+    """Load every object and label file once, in this process, before anything is written: a damaged one is a
+    clear error here instead of an empty output folder and a worker's failure."""
+    for folder in sorted({it.object_dir for it in items}):
+        ArticulatedObject.load(folder)
+    for it in items:
+        if it.label_file is not None:
+            StateLabels.load(Path(it.label_file))
+
+
 def _stats_path(out: Path, object_id: str, state_index: int) -> Path:
     return sample_path(out, object_id, state_index).with_suffix(".json")
 
@@ -221,6 +231,7 @@ def generate_sdf(cfg: GenerateSdfConfig, progress: bool = True) -> dict:
     """Generate (or complete) the SDF dataset described by ``cfg``; returns the manifest's summary fields (of
     every state in the folder, earlier runs' included)."""
     items = _plan(cfg)
+    _check_inputs(items)
     out = output_folder(cfg.out)
     for oid in {it.object_id for it in items}:
         remove_stale_temporaries(out / oid)
