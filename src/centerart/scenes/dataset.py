@@ -44,6 +44,7 @@ from centerart.scenes.textures import make_texture, write_texture
 from centerart.utils.atomic import atomic_directory, atomic_write_json
 from centerart.utils.checks import at_least, interval, workers
 from centerart.utils.folders import check_output_folder, output_folder
+from centerart.utils.json_schema import array, json_problem, optional
 from centerart.utils.manifest import merge_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng
@@ -306,25 +307,66 @@ class SceneView:
     labels: dict
 
 
+#: What readers of ``labels.json`` rely on (the file holds more); checked when a view is read.
+JOINT_LABEL_SCHEMA = {"type": str, "state": float, "state_normalized": float, "range": array(2),
+                      "axis_origin_camera": array(3), "axis_direction_camera": array(3)}  # fmt: skip
+OBJECT_LABEL_SCHEMA = {"instance": int, "object_id": str, "category": str, "camera_T_object": array(4, 4),
+                       "joint": JOINT_LABEL_SCHEMA, "visible_fraction": float, "bbox_xyxy": array(4),
+                       "heatmap_gaussian": {"mean_uv": array(2), "cov_uv": array(2, 2)},
+                       "shape_code?": optional(array(None))}  # fmt: skip
+LABELS_SCHEMA = {"width": int, "height": int, "K": array(3, 3), "world_T_camera": array(4, 4),
+                 "objects": [OBJECT_LABEL_SCHEMA]}  # fmt: skip
+
+
+def read_view_labels(view_dir: Path) -> dict:
+    """A view's ``labels.json``, checked against :data:`LABELS_SCHEMA` (one error naming the file and field)."""
+    path = Path(view_dir) / "labels.json"
+    try:
+        labels = json.loads(path.read_text())
+    except (OSError, ValueError) as err:  # ValueError: malformed JSON, or binary bytes
+        raise CenterArtError(f"{path}: not a readable labels file ({str(err).splitlines()[0]})") from None
+    problem = json_problem(labels, LABELS_SCHEMA)
+    if problem:
+        raise CenterArtError(f"{path}: not a valid labels file ({problem})")
+    return labels
+
+
+def read_png(path: Path) -> np.ndarray:
+    """An image of a rendered view as an array; a damaged file is one error naming it."""
+    try:
+        with Image.open(path) as im:
+            return np.asarray(im)
+    except (OSError, ValueError, SyntaxError) as err:  # PIL: UnidentifiedImageError (OSError), truncated data
+        raise CenterArtError(f"{path}: not a readable image ({str(err).splitlines()[0]})") from None
+
+
+def check_view_files(view_dir: Path, images: tuple[str, ...] = ("rgb.png", "depth_true.png")) -> None:
+    """Labels readable and images intact (PNG chunks and checksums verified, pixels not decoded): a dataset is
+    checked before training starts instead of failing inside a data-loader worker."""
+    read_view_labels(view_dir)
+    for name in images:
+        path = Path(view_dir) / name
+        try:
+            with Image.open(path) as im:
+                im.verify()
+        except (OSError, ValueError, SyntaxError) as err:
+            raise CenterArtError(f"{path}: not a readable image ({str(err).splitlines()[0]})") from None
+
+
 def load_view(view_dir: Path) -> SceneView:
     view_dir = Path(view_dir)
     if not (view_dir / "labels.json").is_file():
         raise CenterArtError(f"{view_dir}: not a rendered view (no labels.json)")
-
-    def img(name):
-        return np.asarray(Image.open(view_dir / name))
-
+    labels = read_view_labels(view_dir)
     realistic = view_dir / "depth_realistic.png"
     return SceneView(
-        rgb=img("rgb.png"),
-        depth_true=img("depth_true.png").astype(np.float32) / DEPTH_SCALE_MM,
-        depth_realistic=(
-            np.asarray(Image.open(realistic)).astype(np.float32) / DEPTH_SCALE_MM if realistic.is_file() else None
-        ),
-        instances=img("instances.png"),
-        links=img("links.png"),
-        heatmap=img("heatmap.png").astype(np.float32) / HEATMAP_SCALE,
-        labels=json.loads((view_dir / "labels.json").read_text()),
+        rgb=read_png(view_dir / "rgb.png"),
+        depth_true=read_png(view_dir / "depth_true.png").astype(np.float32) / DEPTH_SCALE_MM,
+        depth_realistic=read_png(realistic).astype(np.float32) / DEPTH_SCALE_MM if realistic.is_file() else None,
+        instances=read_png(view_dir / "instances.png"),
+        links=read_png(view_dir / "links.png"),
+        heatmap=read_png(view_dir / "heatmap.png").astype(np.float32) / HEATMAP_SCALE,
+        labels=labels,
     )
 
 
