@@ -28,6 +28,7 @@ from centerart.errors import CenterArtError
 from centerart.utils.atomic import atomic_directory
 from centerart.utils.checks import at_least, workers
 from centerart.utils.folders import output_folder
+from centerart.utils.json_schema import json_problem
 from centerart.utils.manifest import code_version, merge_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng, item_seed
@@ -66,8 +67,7 @@ def _generate_one(job: tuple[str, int, int, str, bool, str]) -> dict:
     oid = object_id(category, index)
     final = Path(out) / oid
     if (final / "meta.json").is_file():
-        meta = json.loads((final / "meta.json").read_text())
-        return {**meta["generator"]["record"], "resumed": True}
+        return {**_finished_record(final), "resumed": True}
     started = time.perf_counter()
     rejections = []
     for attempt in range(MAX_ATTEMPTS):
@@ -102,6 +102,24 @@ def _generate_one(job: tuple[str, int, int, str, bool, str]) -> dict:
         except _Rejected as rejection:
             rejections.append(str(rejection))
     raise CenterArtError(f"{oid}: no attempt out of {MAX_ATTEMPTS} passed the checks: {rejections[-3:]}")
+
+
+#: The manifest row of a generated object, kept in its meta.json (``generator.record``) for resuming.
+RECORD_SCHEMA = {"id": str, "category": str, "joint_type": str, "rejected": list, "triangles": int}
+
+
+def _finished_record(final: Path) -> dict:
+    """The manifest row of an object an earlier run finished; one clear error when its meta.json is damaged."""
+    meta_path = final / "meta.json"
+    try:
+        record = json.loads(meta_path.read_text())["generator"]["record"]
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        record, problem = None, f"no generator.record ({type(err).__name__})"
+    else:
+        problem = json_problem(record, RECORD_SCHEMA, "generator.record")
+    if problem:
+        raise CenterArtError(f"{meta_path}: damaged ({problem}); delete {final} to generate it again")
+    return record
 
 
 class _Rejected(Exception):
