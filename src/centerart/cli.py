@@ -164,8 +164,9 @@ def main(argv: list[str] | None = None) -> int:
             return 2
     cmd = cmds[name]
     prog = f"centerart {group} {name}".strip()
-    cfg = tyro.cli(_resolve(cmd.config), args=argv, prog=prog, description=cmd.help)
     try:
+        # Parsing inside the try: configs check their values in __post_init__ and raise CenterArtError there.
+        cfg = tyro.cli(_resolve(cmd.config), args=argv, prog=prog, description=cmd.help)
         _resolve(cmd.run)(cfg)
     except CenterArtError as err:
         print(f"centerart: error: {err}", file=sys.stderr)
