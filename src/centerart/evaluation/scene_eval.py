@@ -54,6 +54,9 @@ class EvalScenesConfig:
     """Depth modes: rendered true depth, and the realistic (stereo) depth the scenes were made with."""
     refine: tuple[Literal["none", "icp", "sdf"], ...] = ("none",)
     """Refinement settings of the learned method, each a row (sdf costs about 20 s per image on CPU)."""
+    shape_prior: Literal["regressed", "nearest", "best_fit"] = "regressed"
+    """The predictor's shape code: the encoder's regression, or snapped to a decoder training code
+    (``inference.shape_prior``)."""
     oracle: bool = True
     """Reference row: a ground-truth label of each object, executed in the scene."""
     baseline: bool = True
@@ -111,10 +114,12 @@ def predictor_for(cfg: dict, refine: str):
     from centerart.inference.predictor import Predictor, PredictorConfig
     from centerart.inference.refinement import RefineConfig, SdfRefineConfig
 
-    key = (cfg["encoder"], cfg["decoder"], refine)
+    key = (cfg["encoder"], cfg["decoder"], refine, cfg.get("shape_prior"))
     if key not in _PREDICTORS:
         config = PredictorConfig(
-            refine=RefineConfig(icp=refine == "icp"), refine_sdf=SdfRefineConfig(enabled=refine == "sdf")
+            refine=RefineConfig(icp=refine == "icp"),
+            refine_sdf=SdfRefineConfig(enabled=refine == "sdf"),
+            shape_prior=cfg.get("shape_prior", "regressed"),
         )
         _PREDICTORS[key] = Predictor(cfg["encoder"], cfg["decoder"], config=config)
     return _PREDICTORS[key]
@@ -233,7 +238,7 @@ def job_config(cfg: EvalScenesConfig) -> dict:
 
 
 #: Settings that change what a scene record holds; a rerun into the same --out must keep them.
-RECORD_SETTINGS = ("encoder", "decoder", "depth", "refine", "oracle", "baseline", "shape", "ablation",
+RECORD_SETTINGS = ("encoder", "decoder", "depth", "refine", "shape_prior", "oracle", "baseline", "shape", "ablation",
                    "labels_per_state", "label_max_trials", "seed")  # fmt: skip
 
 

@@ -27,6 +27,7 @@ from centerart.inference.grasp_filter import CollisionFilterConfig, collision_fr
 from centerart.inference.inputs import check_inputs
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
 from centerart.inference.refinement import RefineConfig, SdfRefineConfig, refine_pose_icp, refine_sdf
+from centerart.inference.shape_prior import best_fit_code, nearest_code
 from centerart.models.encoder.readout import PEAK_THRESHOLD, Detection
 
 
@@ -46,6 +47,9 @@ class PredictorConfig:
     refine_sdf: SdfRefineConfig = field(default_factory=SdfRefineConfig)
     """Pose, shape code and joint code fitted to the observed depth through the decoder (before grasps)."""
     collision: CollisionFilterConfig = field(default_factory=CollisionFilterConfig)
+    shape_prior: Literal["regressed", "nearest", "best_fit"] = "regressed"
+    """The shape code used: the encoder's regression as it is, or snapped to a training code of the decoder
+    (nearest, or the nearby one whose surface fits the observed depth best; :mod:`~.shape_prior`)."""
     batch_objects: bool = True
     """Decode all objects of an image at once (their decoder calls merged into shared batches)."""
     runtime: Literal["auto", "torch", "onnxruntime"] = "auto"
@@ -197,13 +201,28 @@ class Predictor:
         SDF fit when it is on."""
         cfg = self.config
         code, joint, pose, info = det.shape_code.astype(np.float32), det.joint_code, det.camera_T_object, {}
-        refining = (cfg.refine_sdf.enabled or cfg.refine.icp) and det.mask is not None
+        refining = (cfg.refine_sdf.enabled or cfg.refine.icp or cfg.shape_prior == "best_fit") and det.mask is not None
         observed = backproject_depth(depth, camera.K, mask=det.mask) if refining else None
+        code = self._prior_code(code, joint, pose, observed, info)
         if cfg.refine_sdf.enabled and observed is not None:
             pose, code, joint, info["sdf"] = refine_sdf(
                 self.decoder.decoder, code, joint, pose, observed, cfg.refine_sdf
             )
         return pose, code, joint, info, observed
+
+    def _prior_code(self, code: np.ndarray, joint: float, pose: np.ndarray, observed, info: dict) -> np.ndarray:
+        """The shape code after ``config.shape_prior`` (regressed codes pass through)."""
+        prior = self.config.shape_prior
+        if prior == "regressed":
+            return code
+        ids = sorted(self.decoder.codes)
+        codes = np.stack([self.decoder.codes[i] for i in ids]).astype(np.float32)
+        if prior == "best_fit" and observed is not None:
+            k, info["shape_prior"] = best_fit_code(self.fast_decoder, code, joint, codes, observed, pose)
+        else:
+            k = nearest_code(code, codes)
+        info.setdefault("shape_prior", {})["object_id"] = ids[k]
+        return codes[k].copy()
 
     def _finish_object(self, det: Detection, start: tuple, recon, grasps, scene) -> ObjectPrediction:
         cfg = self.config
