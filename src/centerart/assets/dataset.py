@@ -49,6 +49,9 @@ class GenerateObjectsConfig:
     """Parallel worker processes (default: all cores)."""
     skip_checks: bool = False
     """Write objects without the physics checks (faster; not for training data)."""
+    ray_address: str | None = None
+    """Run on a Ray cluster at this address instead of a local process pool; ``local`` starts a Ray instance on
+    this machine with ``workers`` CPUs."""
 
 
 def object_id(category: str, index: int) -> str:
@@ -122,7 +125,8 @@ def generate_objects(cfg: GenerateObjectsConfig) -> dict:
     remove_stale_temporaries(out)
     version = code_version()
     jobs = [(c, i, cfg.seed, str(out), cfg.skip_checks, version) for c in categories for i in range(cfg.count)]
-    records = sorted(parallel_map(_generate_one, jobs, cfg.workers, desc="objects"), key=lambda r: r["id"])
+    results = parallel_map(_generate_one, jobs, cfg.workers, desc="objects", ray_address=cfg.ray_address)
+    records = sorted(results, key=lambda r: r["id"])
     per_category = {}
     for c in categories:
         rows = [r for r in records if r["category"] == c]

@@ -61,18 +61,30 @@ def parallel_map(
         bar.close()
 
 
-def _ray_map(fn: Callable[[Any], Any], items: list[Any], address: str, workers: int, bar: tqdm) -> Iterator[Any]:
+def init_ray(address: str, workers: int | None = None) -> bool:
+    """Connect to the Ray cluster at ``address`` (``"local"``: start a private instance with ``workers`` CPUs) unless
+    Ray is already initialised; returns whether this call initialised it (the caller then shuts it down).
+
+    A caller that runs several :func:`parallel_map` calls (the recipe) initialises Ray once with it, so that each
+    call does not start and stop its own local instance (about 10 s each)."""
     try:
         import ray
     except ImportError as err:
         raise CenterArtError(
             "--ray-address was given but Ray is not installed; install it with `pip install centerart[cluster]`"
         ) from err
-    started_here = not ray.is_initialized()
-    if started_here:
-        # A cluster decides its own CPUs; only a private local instance takes the worker count.
-        local = {"num_cpus": workers} if address == "local" else {}
-        ray.init(address=address, ignore_reinit_error=True, include_dashboard=False, **local)
+    if ray.is_initialized():
+        return False
+    # A cluster decides its own CPUs; only a private local instance takes the worker count.
+    local = {"num_cpus": workers or default_workers()} if address == "local" else {}
+    ray.init(address=address, ignore_reinit_error=True, include_dashboard=False, **local)
+    return True
+
+
+def _ray_map(fn: Callable[[Any], Any], items: list[Any], address: str, workers: int, bar: tqdm) -> Iterator[Any]:
+    started_here = init_ray(address, workers)
+    import ray
+
     try:
         remote = ray.remote(fn)
         pending = [remote.remote(item) for item in items]
