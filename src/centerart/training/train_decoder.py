@@ -8,6 +8,12 @@ Writes to ``--out``::
     OUT/metrics.json      final validation metrics
     OUT/logs/csv/...      per-step/epoch metrics (CSV) and OUT/logs/tensorboard/... (TensorBoard)
     OUT/lightning/last.ckpt   Lightning checkpoint (rerunning the same command resumes from it)
+
+Training runs on CPU, one GPU, or several devices / nodes with DDP (``--devices``, ``--num-nodes``,
+``--strategy``), the same code. Every process holds every shape code (one ``nn.Embedding``); DDP averages the
+gradients of all parameters, codes included, so an object's code moves by the gradient of whichever processes
+drew it in a step (zero from the others), exactly as one process with the combined batch would move it (Adam
+removes the 1/world-size factor of the average). Only global rank 0 writes the exported files.
 """
 
 from __future__ import annotations
@@ -61,6 +67,13 @@ class TrainDecoderConfig:
     """Validate every N epochs (held-out objects need a code fit, which costs time)."""
     val_code_fit_steps: int = 100
     accelerator: Literal["auto", "cpu", "gpu"] = "auto"
+    devices: int = 1
+    """Devices per node (GPUs, or CPU processes with ``--accelerator cpu``); more than one trains with DDP."""
+    num_nodes: int = 1
+    """Machines; more than one needs a cluster launcher (SLURM, torchrun) starting this command on each."""
+    strategy: Literal["auto", "ddp", "ddp_spawn"] = "auto"
+    """auto: Lightning's choice (DDP for several devices); ddp: one process per device, launched by Lightning or
+    the cluster; ddp_spawn: processes spawned by this one (works from any caller, e.g. a test or the recipe)."""
     threads: int = 0
     """torch CPU threads (0: torch default)."""
     resume: bool = True
@@ -130,7 +143,10 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
         val_loader,
         ckpt_path=str(last) if cfg.resume and last.is_file() else None,
     )
-    metrics = _final_metrics(cfg, trainer, module, val_loader, data, time.perf_counter() - t0)
+    seconds = time.perf_counter() - t0
+    if trainer.global_rank != 0:  # DDP launched per device (strategy ddp): rank 0 alone validates and exports
+        return {"checkpoint": None, "metrics": {}, "split": data.split}
+    metrics = _final_metrics(cfg, trainer, module, val_loader, data, seconds)
     return _export(cfg, out, module, data, lcfg, metrics)
 
 
@@ -191,7 +207,9 @@ def _trainer(cfg: TrainDecoderConfig, out: Path):
     return L.Trainer(
         max_epochs=cfg.epochs,
         accelerator=cfg.accelerator,
-        devices=1,
+        devices=cfg.devices,
+        num_nodes=cfg.num_nodes,
+        strategy=cfg.strategy,
         logger=loggers,
         callbacks=[ckpt_cb, TQDMProgressBar(refresh_rate=10)] if cfg.progress else [ckpt_cb],
         enable_progress_bar=cfg.progress,
@@ -205,17 +223,21 @@ def _trainer(cfg: TrainDecoderConfig, out: Path):
 
 
 def _final_metrics(cfg: TrainDecoderConfig, trainer, module, val_loader, data: _Data, seconds: float) -> dict:
-    """The trainer's last metrics, validation redone with the final weights, and training time and throughput."""
+    """The trainer's last metrics, validation redone with the final weights, and training time and throughput.
+
+    The final validation runs in this process on the module directly (not through the trainer), so that it is the
+    same single-process computation after one-device and after multi-process (DDP) training."""
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
     if data.heldout_states:
         # Final numbers with the final weights (the last in-loop validation may be up to val_every epochs old).
-        trainer.validate(module, val_loader, verbose=False)
-        metrics.update({k: float(v) for k, v in trainer.callback_metrics.items() if k.startswith("val")})
-    elif data.heldout_objects:
+        metrics.update(module.heldout_state_metrics(val_loader))
+    if data.heldout_objects:
         metrics.update({f"val_object/{k}": v for k, v in module.heldout_object_metrics().items()})
-    points_seen = trainer.global_step * cfg.batch_items * cfg.points_per_item
+    world = cfg.devices * cfg.num_nodes
+    points_seen = trainer.global_step * cfg.batch_items * cfg.points_per_item * world
     metrics["train_seconds"] = seconds
     metrics["train_points_per_second"] = points_seen / max(seconds, 1e-9)
+    metrics["world_size"] = world
     return metrics
 
 

@@ -161,6 +161,8 @@ def train_encoder(cfg: TrainEncoderConfig) -> dict:
     seconds = time.perf_counter() - t0
     if val_loader is not None:
         trainer.validate(module, val_loader, verbose=False)  # final numbers with the final weights
+    if trainer.global_rank != 0:  # DDP launched per device (strategy ddp): rank 0 alone exports
+        return {"checkpoint": None, "metrics": {}}
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
     images = trainer.global_step * cfg.batch_size * cfg.devices * cfg.num_nodes
     metrics.update(train_seconds_this_run=seconds, steps=trainer.global_step, epochs=trainer.current_epoch)
