@@ -177,7 +177,10 @@ def _loaders(cfg: TrainDecoderConfig, data: _Data):
 
     from centerart.training.decoder_data import PointBatchDataset
 
-    gen = torch.Generator().manual_seed(cfg.seed)
+    # Several processes: Lightning shuffles with a DistributedSampler seeded by --seed, and a torch.Generator would
+    # not survive the trip to spawned processes (its state tensor fails to unpickle from shared memory there).
+    distributed = cfg.devices * cfg.num_nodes > 1
+    gen = None if distributed else torch.Generator().manual_seed(cfg.seed)
     train_loader = DataLoader(
         PointBatchDataset(data.train, data.code_index, cfg.points_per_item, cfg.min_items_per_epoch),
         batch_size=cfg.batch_items,
@@ -234,11 +237,20 @@ def _final_metrics(cfg: TrainDecoderConfig, trainer, module, val_loader, data: _
     if data.heldout_objects:
         metrics.update({f"val_object/{k}": v for k, v in module.heldout_object_metrics().items()})
     world = cfg.devices * cfg.num_nodes
-    points_seen = trainer.global_step * cfg.batch_items * cfg.points_per_item * world
+    points_seen = _global_step(trainer, Path(cfg.out)) * cfg.batch_items * cfg.points_per_item * world
     metrics["train_seconds"] = seconds
     metrics["train_points_per_second"] = points_seen / max(seconds, 1e-9)
     metrics["world_size"] = world
     return metrics
+
+
+def _global_step(trainer, out: Path) -> int:
+    """Optimizer steps of the run: the trainer's count, or after spawned DDP processes (whose counters do not come
+    back to this process) the count saved in ``last.ckpt``."""
+    last = out / "lightning" / "last.ckpt"
+    if trainer.global_step or not last.is_file():
+        return trainer.global_step
+    return int(torch.load(last, map_location="cpu", weights_only=False).get("global_step", 0))
 
 
 def training_object_fingerprints(data: Path, object_ids: list[str]) -> dict[str, str | None]:
