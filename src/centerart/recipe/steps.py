@@ -262,6 +262,7 @@ def run_encoder(cfg: RecipeConfig, p: Paths, planned: dict) -> dict:
 # ---------------------------------------------------------------------------- evaluation
 def plan_evaluation(cfg: RecipeConfig, p: Paths) -> dict[str, Any]:
     from centerart.evaluation.scene_eval import EvalScenesConfig
+    from centerart.utils.parallel import default_workers
 
     tests = tuple(c.out for n, c in plan_scenes(cfg, p).items() if n.startswith("test_"))
     if not tests:
@@ -281,7 +282,7 @@ def plan_evaluation(cfg: RecipeConfig, p: Paths) -> dict[str, Any]:
             oracle=v.oracle,
             baseline=v.baseline,
             max_scenes=v.max_scenes,
-            workers=cfg.workers or 1,
+            workers=cfg.workers or default_workers(),
             threads=v.threads,
             seed=cfg.seed,
             progress=cfg.progress,
