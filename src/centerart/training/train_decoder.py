@@ -11,9 +11,9 @@ Writes to ``--out``::
 
 Training runs on CPU, one GPU, or several devices / nodes with DDP (``--devices``, ``--num-nodes``,
 ``--strategy``), the same code. Every process holds every shape code (one ``nn.Embedding``); DDP averages the
-gradients of all parameters, codes included, so an object's code moves by the gradient of whichever processes
-drew it in a step (zero from the others), exactly as one process with the combined batch would move it (Adam
-removes the 1/world-size factor of the average). Only global rank 0 writes the exported files.
+gradients of all parameters, codes included: an object's code gets the gradient of whichever processes drew it in
+a step (zero from the others), and since each process's loss is a mean over its batch, the average is exactly the
+gradient of one process holding the combined batch. Only global rank 0 writes the exported files.
 """
 
 from __future__ import annotations
