@@ -82,6 +82,17 @@ def test_changed_settings_and_equal_seeds_are_refused(tiny_run, capsys):
     assert "grasps step was made with other settings" in err and "per_state: 4 -> 5" in err
     assert main(["recipe", "--preset", "tiny", "--out", str(tiny_run), "--test-seed", "0"]) == 2
     assert "--test-seed must differ from --seed" in capsys.readouterr().err
+    # Lightning's own ddp launcher would re-run the whole command line in every process.
+    assert main(["recipe", "--preset", "tiny", "--out", str(tiny_run), "--devices", "2", "--strategy", "ddp"]) == 2
+    assert "needs a cluster launcher" in capsys.readouterr().err
+
+
+def test_other_ranks_only_follow_the_training_steps(tiny_run, monkeypatch):
+    before = (tiny_run / "manifest.json").read_bytes()
+    monkeypatch.setenv("RANK", "1")  # as torchrun sets it in the second process
+    lines = []
+    assert run_recipe(recipe_preset("tiny", out=tiny_run, progress=False), echo=lines.append) == {}
+    assert lines == [] and (tiny_run / "manifest.json").read_bytes() == before  # both training steps were done
 
 
 @pytest.mark.slow  # ~40 s: a local Ray instance (~15 s to start), then the SDF samples and the decoder again
