@@ -173,9 +173,10 @@ def main(argv: list[str] | None = None) -> int:
             return 2
     cmd = cmds[name]
     prog = f"centerart {group} {name}".strip()
-    default = _resolve(cmd.default)(argv) if cmd.default else None
-    cfg = tyro.cli(_resolve(cmd.config), args=argv, prog=prog, description=cmd.help, default=default)
     try:
+        # Parsing inside the try: configs check their values in __post_init__ and raise CenterArtError there.
+        default = _resolve(cmd.default)(argv) if cmd.default else None
+        cfg = tyro.cli(_resolve(cmd.config), args=argv, prog=prog, description=cmd.help, default=default)
         _resolve(cmd.run)(cfg)
     except CenterArtError as err:
         print(f"centerart: error: {err}", file=sys.stderr)

@@ -14,7 +14,6 @@ With no ``--rgb`` it runs on the bundled example (a kitchen of objects no model 
 
 from __future__ import annotations
 
-import shutil
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -24,6 +23,9 @@ import numpy as np
 
 from centerart.errors import CenterArtError
 from centerart.inference.predictor import PredictorConfig
+from centerart.utils.atomic import atomic_directory
+from centerart.utils.checks import positive
+from centerart.utils.folders import check_output_folder
 
 EXAMPLE_DIR = Path(__file__).resolve().parent / "examples" / "kitchen"
 
@@ -51,6 +53,9 @@ class PredictConfig:
     predictor: PredictorConfig = field(default_factory=PredictorConfig)
     view: bool = False
     """Open the interactive 3-D viewer on the result when done."""
+
+    def __post_init__(self):
+        positive("--depth-scale", self.depth_scale, allow_none=True)
 
 
 def resolve_inputs(cfg: PredictConfig):
@@ -111,24 +116,14 @@ def write_outputs(tmp: Path, predictor, preds, rgb, depth, camera, cfg: PredictC
 
 
 def run_predict(cfg: PredictConfig) -> dict:
-    """Predict and write the output folder; returns the predictions record."""
+    """Predict and write the output folder (atomically: complete or absent); returns the predictions record."""
     from centerart.inference.inputs import check_inputs
     from centerart.inference.predictor import Predictor
 
+    out = check_output_folder(cfg.out)
     rgb, depth, camera, sources = resolve_inputs(cfg)
     depth = check_inputs(rgb, depth, camera)  # before loading any model: a bad input is reported at once
     predictor = Predictor(cfg.encoder, cfg.decoder, cfg.device, cfg.predictor)
     preds = predictor.predict(rgb, depth, camera)
-    out = Path(cfg.out)
-    if out.exists() and not out.is_dir():
-        raise CenterArtError(f"--out {out}: exists and is not a folder")
-    tmp = out.parent / f".{out.name}.tmp"
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.mkdir(parents=True)
-    try:
-        record = write_outputs(tmp, predictor, preds, rgb, depth, camera, cfg, sources)
-        shutil.rmtree(out, ignore_errors=True)
-        tmp.rename(out)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    return record
+    with atomic_directory(out) as tmp:
+        return write_outputs(tmp, predictor, preds, rgb, depth, camera, cfg, sources)

@@ -25,6 +25,7 @@ from lxml import etree
 
 from centerart.assets.canonical_frame import BASE_ROTATIONS, TYPICAL_HEIGHT_M
 from centerart.assets.categories import normalize_category
+from centerart.assets.validation import check_mesh, check_meta, check_urdf_numbers
 from centerart.errors import AssetError
 from centerart.geometry.transforms import apply_transform, make_pose, rotation_about_axis
 
@@ -370,17 +371,19 @@ def _read_meta(folder: Path) -> dict:
     if not meta_path.is_file():
         return {}
     try:
-        return json.loads(meta_path.read_text())
-    except json.JSONDecodeError as err:
+        meta = json.loads(meta_path.read_text())
+    except ValueError as err:  # JSONDecodeError, or UnicodeDecodeError for a binary file
         raise AssetError(meta_path, f"malformed JSON: {err}") from None
+    return check_meta(meta, meta_path)
 
 
 def _parse_urdf(urdf_path: Path) -> yourdfpy.Robot:
     # Parse strictly first: yourdfpy silently falls back to a recovering parser on broken XML.
     try:
-        etree.parse(str(urdf_path), etree.XMLParser(recover=False, remove_comments=True))
+        tree = etree.parse(str(urdf_path), etree.XMLParser(recover=False, remove_comments=True))
     except etree.XMLSyntaxError as err:
         raise AssetError(urdf_path, f"malformed URDF XML: {err}") from None
+    check_urdf_numbers(tree, urdf_path)
     try:
         urdf = yourdfpy.URDF.load(
             str(urdf_path), build_scene_graph=False, load_meshes=False, load_collision_meshes=False
@@ -424,10 +427,16 @@ DEFAULT_RGBA = (0.7, 0.7, 0.7, 1.0)
 
 @functools.lru_cache(maxsize=512)
 def _load_mesh_file(path: str) -> trimesh.Trimesh:
-    loaded = trimesh.load(path, force="mesh", process=False, skip_materials=True)
+    """The mesh at ``path``, checked (:func:`~centerart.assets.validation.check_mesh`); cached, so a file shared by
+    several links or objects is parsed and checked once."""
+    try:
+        loaded = trimesh.load(path, force="mesh", process=False, skip_materials=True)
+    except Exception as err:  # trimesh raises many types on damaged files
+        reason = str(err).splitlines()[0] if str(err).strip() else type(err).__name__
+        raise AssetError(path, f"cannot read mesh: {reason}") from None
     if not isinstance(loaded, trimesh.Trimesh):
-        raise ValueError("file holds no triangles")
-    return loaded
+        raise AssetError(path, "mesh is empty (no triangles): the file is damaged or not a mesh")
+    return check_mesh(loaded, path)
 
 
 def _load_parts(robot: yourdfpy.Robot, folder: Path, urdf_path: Path, collision: bool) -> dict[str, list[Part]]:
@@ -442,10 +451,7 @@ def _load_parts(robot: yourdfpy.Robot, folder: Path, urdf_path: Path, collision:
                 mesh_path = (folder / geom.mesh.filename).resolve()
                 if not mesh_path.is_file():
                     raise AssetError(urdf_path, f"link {link.name!r} names a missing mesh file {geom.mesh.filename}")
-                try:
-                    mesh = _load_mesh_file(str(mesh_path)).copy()
-                except Exception as err:
-                    raise AssetError(mesh_path, f"cannot read mesh: {err}") from None
+                mesh = _load_mesh_file(str(mesh_path)).copy()
                 if geom.mesh.scale is not None:
                     mesh.apply_scale(np.broadcast_to(np.asarray(geom.mesh.scale, float), (3,)))
             elif geom.box is not None:

@@ -25,8 +25,11 @@ from centerart.assets.generator import generate_spec
 from centerart.assets.physics_checks import check_object
 from centerart.assets.writer import write_object
 from centerart.errors import CenterArtError
-from centerart.utils.atomic import atomic_directory, remove_stale_temporaries
-from centerart.utils.manifest import code_version, write_manifest
+from centerart.utils.atomic import atomic_directory
+from centerart.utils.checks import at_least, workers
+from centerart.utils.folders import output_folder
+from centerart.utils.json_schema import json_problem
+from centerart.utils.manifest import code_version, merge_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng, item_seed
 
@@ -53,6 +56,10 @@ class GenerateObjectsConfig:
     """Run on a Ray cluster at this address instead of a local process pool; ``local`` starts a Ray instance on
     this machine with ``workers`` CPUs."""
 
+    def __post_init__(self):
+        at_least("--count", self.count, 0)
+        workers("--workers", self.workers)
+
 
 def object_id(category: str, index: int) -> str:
     return f"{category}_{index:04d}"
@@ -63,8 +70,7 @@ def _generate_one(job: tuple[str, int, int, str, bool, str]) -> dict:
     oid = object_id(category, index)
     final = Path(out) / oid
     if (final / "meta.json").is_file():
-        meta = json.loads((final / "meta.json").read_text())
-        return {**meta["generator"]["record"], "resumed": True}
+        return {**_finished_record(final), "resumed": True}
     started = time.perf_counter()
     rejections = []
     for attempt in range(MAX_ATTEMPTS):
@@ -101,6 +107,24 @@ def _generate_one(job: tuple[str, int, int, str, bool, str]) -> dict:
     raise CenterArtError(f"{oid}: no attempt out of {MAX_ATTEMPTS} passed the checks: {rejections[-3:]}")
 
 
+#: The manifest row of a generated object, kept in its meta.json (``generator.record``) for resuming.
+RECORD_SCHEMA = {"id": str, "category": str, "joint_type": str, "rejected": list, "triangles": int}
+
+
+def _finished_record(final: Path) -> dict:
+    """The manifest row of an object an earlier run finished; one clear error when its meta.json is damaged."""
+    meta_path = final / "meta.json"
+    try:
+        record = json.loads(meta_path.read_text())["generator"]["record"]
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        record, problem = None, f"no generator.record ({type(err).__name__})"
+    else:
+        problem = json_problem(record, RECORD_SCHEMA, "generator.record")
+    if problem:
+        raise CenterArtError(f"{meta_path}: damaged ({problem}); delete {final} to generate it again")
+    return record
+
+
 class _Rejected(Exception):
     pass
 
@@ -113,22 +137,28 @@ def _count_triangles(folder: Path) -> int:
 
 
 def generate_objects(cfg: GenerateObjectsConfig) -> dict:
-    """Generate (or complete) the dataset described by ``cfg``; returns the manifest dictionary."""
-    if cfg.count < 0:
-        raise CenterArtError(f"--count must be >= 0, got {cfg.count}")
+    """Generate (or complete) the dataset described by ``cfg``; returns the manifest's counts and rows, which list
+    every object in the folder (earlier or concurrent runs of other categories too)."""
     categories = CATEGORIES if cfg.category == "all" else (cfg.category,)
     for c in categories:
         if c not in CATEGORIES:
             raise CenterArtError(f"unknown category {c!r}; choose from {', '.join(CATEGORIES)} or all")
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)
+    out = output_folder(cfg.out)
     version = code_version()
     jobs = [(c, i, cfg.seed, str(out), cfg.skip_checks, version) for c in categories for i in range(cfg.count)]
     results = parallel_map(_generate_one, jobs, cfg.workers, desc="objects", ray_address=cfg.ray_address)
     records = sorted(results, key=lambda r: r["id"])
+    written = merge_manifest(
+        out, "objects", cfg, "objects", records, key=lambda r: r["id"], summarize=_counts,
+        present=lambda r: (out / r["id"] / "meta.json").is_file(), seed=cfg.seed,
+    )  # fmt: skip
+    return {"counts": written["counts"], "objects": written["objects"]}
+
+
+def _counts(records: list[dict]) -> dict:
+    """Objects, rejections, joint types and mean triangles per category of the manifest's rows."""
     per_category = {}
-    for c in categories:
+    for c in sorted({r["category"] for r in records}):
         rows = [r for r in records if r["category"] == c]
         per_category[c] = {
             "objects": len(rows),
@@ -137,9 +167,7 @@ def generate_objects(cfg: GenerateObjectsConfig) -> dict:
             "prismatic": sum(r["joint_type"] == "prismatic" for r in rows),
             "mean_triangles": float(np.mean([r["triangles"] for r in rows])) if rows else 0.0,
         }
-    fields = {"seed": cfg.seed, "counts": per_category, "objects": records}
-    write_manifest(out, "objects", cfg, **fields)
-    return {"counts": per_category, "objects": records}
+    return {"counts": per_category}
 
 
 def list_objects(folder: Path) -> list[Path]:

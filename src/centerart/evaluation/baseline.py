@@ -17,6 +17,7 @@ import numpy as np
 #: RANSAC inlier distance (m) of the front-face plane.
 PLANE_DISTANCE_M = 0.01
 PLANE_ITERATIONS = 500
+PLANE_SAMPLE = 4000  # points the hypotheses are scored on
 #: Height band (m, along the face normal toward the camera) of handle points.
 HANDLE_MIN_HEIGHT_M = 0.015
 HANDLE_MAX_HEIGHT_M = 0.09
@@ -40,22 +41,33 @@ def thresholds() -> dict:
 
 
 def front_plane(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, float] | None:
-    """(unit normal toward the camera, offset d) with ``n . p + d = 0`` on the dominant plane, or None."""
-    import open3d as o3d
+    """(unit normal toward the camera, offset d) with ``n . p + d = 0`` on the dominant plane, or None.
 
+    RANSAC written here rather than open3d's ``segment_plane``: that one runs its iterations in parallel and
+    returns slightly different planes from run to run even when seeded, and the evaluation's records must be
+    reproducible. All hypotheses are scored at once on a subsample, the winner is refit to its inliers."""
     if len(points) < 50:
         return None
-    o3d.utility.random.seed(seed)
-    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-    (a, b, c, d), inliers = cloud.segment_plane(PLANE_DISTANCE_M, 3, PLANE_ITERATIONS)
-    n = np.array([a, b, c], float)
-    norm = np.linalg.norm(n)
-    if len(inliers) < 30 or norm < 1e-9:
+    rng = np.random.default_rng(seed)
+    sample = points if len(points) <= PLANE_SAMPLE else points[rng.choice(len(points), PLANE_SAMPLE, replace=False)]
+    tri = sample[rng.integers(0, len(sample), (PLANE_ITERATIONS, 3))]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(normals, axis=1)
+    keep = length > 1e-9
+    if not keep.any():
         return None
-    n, d = n / norm, d / norm
-    if n @ points[inliers].mean(axis=0) > 0:  # the camera is at the origin: face the normal toward it
-        n, d = -n, -d
-    return n, float(d)
+    normals = normals[keep] / length[keep, None]
+    offsets = -np.einsum("ij,ij->i", normals, tri[keep, 0])
+    counts = (np.abs(sample @ normals.T + offsets) < PLANE_DISTANCE_M).sum(axis=0)
+    best = int(np.argmax(counts))
+    inliers = points[np.abs(points @ normals[best] + offsets[best]) < PLANE_DISTANCE_M]
+    if len(inliers) < 30:
+        return None
+    centroid = inliers.mean(axis=0)
+    n = np.linalg.svd(inliers - centroid, full_matrices=False)[2][2]
+    if n @ centroid > 0:  # the camera is at the origin: face the normal toward it
+        n = -n
+    return n, float(-n @ centroid)
 
 
 def handle_clusters(points: np.ndarray, normal: np.ndarray, offset: float) -> list[np.ndarray]:

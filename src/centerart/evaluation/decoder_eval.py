@@ -44,6 +44,7 @@ from centerart.evaluation.metrics import (
 from centerart.evaluation.metrics import (
     GRASP_MATCH_POSITION_M as GRASP_MATCH_DISTANCE,
 )
+from centerart.utils.checks import at_least
 
 GROUPS = ("train", "heldout_state", "heldout_object")
 
@@ -70,6 +71,13 @@ class EvalDecoderConfig:
     code_fit_steps: int = 200
     seed: int = 0
     max_objects: int | None = None
+
+    def __post_init__(self):
+        for name in ("states_per_object", "top_k", "top_k_coverage"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 1)
+        at_least("--resolution", self.resolution, 8)
+        at_least("--code-fit-steps", self.code_fit_steps, 0)
+        at_least("--max-objects", self.max_objects, 1, allow_none=True)
 
 
 # --------------------------------------------------------------------------------------- metric functions
@@ -134,7 +142,9 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
     from centerart.models.checkpoint import load_decoder
     from centerart.sdf.samples import load_states
     from centerart.utils.atomic import atomic_write_json
+    from centerart.utils.folders import check_output_folder
 
+    check_output_folder(cfg.out)  # before minutes of evaluation, not after
     loaded = load_decoder(cfg.checkpoint)
     states = load_states(cfg.data, 30000, cfg.seed, progress=False)
     by_obj: dict[str, list] = {}

@@ -32,6 +32,8 @@ import numpy as np
 
 from centerart.errors import CenterArtError
 from centerart.utils.atomic import atomic_write_json
+from centerart.utils.checks import at_least
+from centerart.utils.folders import check_output_folder
 
 REFINE_METHODS = {"none": "centerart", "icp": "centerart+icp", "sdf": "centerart+sdf"}
 
@@ -77,6 +79,11 @@ class EvalScenesConfig:
     allow_training_objects: bool = False
     """Diagnostics only: evaluate scenes of objects the models were trained on (an upper bound, not a held-out
     result). The report then says so at its top and lists the shared objects."""
+
+    def __post_init__(self):
+        for name in ("labels_per_state", "label_max_trials", "workers", "threads"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 1)
+        at_least("--max-scenes", self.max_scenes, 1, allow_none=True)
 
 
 def set_key(folder: Path) -> str:
@@ -257,7 +264,7 @@ def evaluate_scenes(cfg: EvalScenesConfig) -> dict:
     if not cfg.scenes:
         raise CenterArtError("--scenes: give at least one scenes folder")
     jc = job_config(cfg)
-    out = Path(cfg.out)
+    out = check_output_folder(cfg.out)
     sets = {set_key(f): list_scene_dirs(f, cfg.max_scenes) for f in cfg.scenes}
     testset = check_test_sets(cfg.scenes, sets, Path(jc["encoder"]), Path(jc["decoder"]), cfg.allow_training_objects)
     out.mkdir(parents=True, exist_ok=True)

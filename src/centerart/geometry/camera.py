@@ -37,8 +37,10 @@ class Intrinsics:
     def from_matrix(cls, K, width: int, height: int) -> Intrinsics:
         """From a 3x3 ``K`` (nested lists or array) and the image size it belongs to."""
         K = np.asarray(K, dtype=float)
-        if K.shape != (3, 3) or not np.all(np.isfinite(K)):
+        if K.shape != (3, 3):
             raise ValueError(f"K must be a finite 3x3 matrix, got shape {K.shape}")
+        if not np.all(np.isfinite(K)):
+            raise ValueError("K must be a finite 3x3 matrix, got NaN or infinite entries")
         return cls(int(width), int(height), K[0, 0], K[1, 1], K[0, 2], K[1, 2], K[0, 1])
 
     @property

@@ -26,13 +26,14 @@ import numpy as np
 
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.dataset import list_objects
-from centerart.errors import CenterArtError
 from centerart.geometry.transforms import make_pose
 from centerart.grasps import executor as ex
 from centerart.grasps.candidates import CandidateSampler
 from centerart.grasps.labels import StateLabels, state_path
 from centerart.utils.atomic import atomic_write_json, remove_stale_temporaries
-from centerart.utils.manifest import write_manifest
+from centerart.utils.checks import at_least, workers
+from centerart.utils.folders import check_output_folder, output_folder
+from centerart.utils.manifest import merge_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng
 
@@ -65,6 +66,12 @@ class GenerateGraspsConfig:
     ray_address: str | None = None
     """Run on a Ray cluster at this address instead of a local process pool; ``local`` starts a Ray instance on
     this machine with ``workers`` CPUs."""
+
+    def __post_init__(self):
+        for name in ("states", "per_state", "max_trials", "max_candidates"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 1)
+        at_least("--keep-failures", self.keep_failures, 0)
+        workers("--workers", self.workers)
 
 
 def state_values(obj: ArticulatedObject, n: int) -> np.ndarray:
@@ -194,34 +201,27 @@ def _job(item: tuple[str, int, dict]) -> dict:
 
 
 def generate_grasps(cfg: GenerateGraspsConfig) -> dict:
-    """Generate (or complete) the label set described by ``cfg``; returns the manifest's summary."""
-    for name in ("states", "per_state", "max_trials", "max_candidates"):
-        if getattr(cfg, name) < 1:
-            raise CenterArtError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(cfg, name)}")
+    """Generate (or complete) the label set described by ``cfg``; returns the manifest's counts per category
+    (of every item in the folder, earlier runs' included)."""
     folders = list_objects(Path(cfg.objects))
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)
+    check_output_folder(cfg.out)
+    for f in folders:  # fail early, in this process and before writing, on objects that cannot be loaded
+        ArticulatedObject.load(f)
+    out = output_folder(cfg.out)
     for sub in out.iterdir():
         if sub.is_dir():
             remove_stale_temporaries(sub)
-    for f in folders:  # fail early, in this process, on objects that cannot be loaded
-        ArticulatedObject.load(f)
     cfg_dict = {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(cfg).items()}
     items = [(str(f), k, cfg_dict) for f in folders for k in range(cfg.states)]
     rows = list(parallel_map(_job, items, cfg.workers, desc="grasp labels", ray_address=cfg.ray_address))
-    rows.sort(key=lambda r: (r["object_id"], r["state_index"]))
-    summary = summarize(rows)
-    write_manifest(
-        out,
-        "grasps",
-        cfg,
-        seed=cfg.seed,
-        protocol=protocol_constants(),
-        counts=summary,
-        items=[{k: v for k, v in r.items() if k != "resumed"} for r in rows],
-    )
-    return summary
+    rows = [{k: v for k, v in r.items() if k != "resumed"} for r in rows]
+    written = merge_manifest(
+        out, "grasps", cfg, "items", rows, key=lambda r: (r["object_id"], r["state_index"]),
+        summarize=lambda all_rows: {"counts": summarize(all_rows)},
+        present=lambda r: state_path(out, r["object_id"], r["state_index"]).is_file(),
+        seed=cfg.seed, protocol=protocol_constants(),
+    )  # fmt: skip
+    return written["counts"]
 
 
 def summarize(rows: list[dict], enough: int = 100) -> dict:

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
@@ -37,6 +38,11 @@ from centerart.utils.npz_records import state_file as state_path
 
 @dataclass
 class StateLabels:
+    #: Checks of a file's arrays when it is read (utils/npz_records.py).
+    SHAPES: ClassVar[dict] = {"poses": ("N", 4, 4), "displacement": ("N",), "failed_poses": ("M", 4, 4),
+                              "failed_displacement": ("M",)}  # fmt: skip
+    FINITE: ClassVar[tuple] = ("poses", "displacement", "failed_poses", "failed_displacement")
+
     object_id: str
     state_index: int
     q: float

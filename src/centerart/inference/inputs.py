@@ -13,6 +13,7 @@ import numpy as np
 
 from centerart.errors import CenterArtError
 from centerart.geometry.camera import Intrinsics
+from centerart.utils.npz_records import safe_reason
 
 #: A depth image whose median valid value exceeds this many "metres" is almost surely millimetres.
 MILLIMETRE_SUSPICION_M = 20.0
@@ -44,7 +45,9 @@ def read_depth(path: Path, depth_scale: float | None = None) -> np.ndarray:
         else:
             raw = np.asarray(Image.open(path))
     except (UnidentifiedImageError, OSError, ValueError) as err:
-        raise CenterArtError(f"--depth {path}: not a readable depth image ({err})") from None
+        raise CenterArtError(f"--depth {path}: not a readable depth image ({safe_reason(err)})") from None
+    if not np.issubdtype(raw.dtype, np.integer) and not np.issubdtype(raw.dtype, np.floating):
+        raise CenterArtError(f"--depth {path}: holds {raw.dtype} values, expected integer or real numbers")
     if raw.ndim == 3 and raw.shape[-1] == 1:
         raw = raw[..., 0]
     if raw.ndim != 2:
@@ -86,7 +89,13 @@ def intrinsics_from_dict(data, name: str, width: int | None, height: int | None)
     w, h = data.get("width", width), data.get("height", height)
     if w is None or h is None:
         raise CenterArtError(f"--intrinsics {name}: width and height missing")
-    return Intrinsics.from_matrix(K, int(w), int(h))
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) and v > 0 and float(v).is_integer()
+               for v in (w, h)):  # fmt: skip
+        raise CenterArtError(f"--intrinsics {name}: width and height must be positive integers, got {w!r}, {h!r}")
+    try:
+        return Intrinsics.from_matrix(K, int(w), int(h))
+    except ValueError as err:  # a non-finite or singular K
+        raise CenterArtError(f"--intrinsics {name}: {str(err).splitlines()[0]}") from None
 
 
 def check_inputs(rgb: np.ndarray, depth: np.ndarray, camera: Intrinsics) -> np.ndarray:

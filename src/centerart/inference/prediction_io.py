@@ -32,6 +32,7 @@ import numpy as np
 
 from centerart.errors import CenterArtError
 from centerart.inference.predictor import ObjectPrediction
+from centerart.utils.json_schema import array, json_problem, optional
 
 FORMAT = "centerart-predictions"
 VERSION = 1
@@ -39,6 +40,19 @@ FRAMES = (
     "OpenCV camera frame of the input image (x right, y down, z forward); metres, radians; "
     "poses are 4x4 camera_T_X; grasps are TCP poses (z approach, y finger closing, origin between the pads)"
 )
+
+
+#: What readers of predictions.json (the viewer) rely on; checked by :func:`read_predictions`.
+GRASP_SCHEMA = {"camera_T_tcp": array(4, 4), "score": float}
+JOINT_SCHEMA = {
+    "type": str,
+    "state_normalized": float,
+    "axis_direction_camera": array(3),
+    "axis_point_camera": array(3),
+}
+OBJECT_SCHEMA = {"camera_T_object": array(4, 4), "joint": JOINT_SCHEMA, "shape_code": array(None),
+                 "grasps": [GRASP_SCHEMA], "mesh?": optional(str)}  # fmt: skip
+PREDICTIONS_SCHEMA = {"image": {"K": array(3, 3), "width": int, "height": int}, "objects": [OBJECT_SCHEMA]}
 
 
 def object_record(index: int, pred: ObjectPrediction, mesh_file: str | None) -> dict:
@@ -94,4 +108,7 @@ def read_predictions(path: Path) -> dict:
         raise CenterArtError(f"{path}: not readable JSON ({err})") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT or data.get("version") != VERSION:
         raise CenterArtError(f"{path}: not a centerart predictions file (format {FORMAT!r}, version {VERSION})")
+    problem = json_problem(data, PREDICTIONS_SCHEMA)
+    if problem:
+        raise CenterArtError(f"{path}: not a valid predictions file ({problem})")
     return data

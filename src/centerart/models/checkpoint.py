@@ -25,7 +25,7 @@ import numpy as np
 import torch
 
 from centerart.errors import CenterArtError
-from centerart.models.checkpoint_files import read_blob, write_blob
+from centerart.models.checkpoint_files import check_fields, read_blob, write_blob
 from centerart.models.decoder import DecoderConfig, SGDFDecoder
 
 FORMAT = "centerart-sgdf-decoder"
@@ -82,8 +82,28 @@ def save_checkpoint(
     return write_blob(path, blob)
 
 
+#: Fields every decoder checkpoint must have, with their types (after ``torch.load``).
+FIELDS = {"decoder_config": dict, "state_dict": dict, "object_ids": list, "codes": torch.Tensor, "bounds": torch.Tensor}
+
+
 def _read(path: Path) -> dict:
-    return read_blob(path, FORMAT, VERSION, "decoder")
+    """The checkpoint dict, its fields checked: shape codes (K, code_dim) finite for K string object ids, bounds a
+    finite (2, 3) box."""
+    blob = read_blob(path, FORMAT, VERSION, "decoder")
+    check_fields(blob, path, "decoder", FIELDS)
+    codes, ids, bounds = blob["codes"], blob["object_ids"], blob["bounds"]
+    problem = None
+    if codes.ndim != 2 or codes.shape[0] != len(ids) or not codes.is_floating_point():
+        problem = f"codes of shape {tuple(codes.shape)} for {len(ids)} object ids"
+    elif not all(isinstance(i, str) for i in ids):
+        problem = "object_ids are not all strings"
+    elif not torch.isfinite(codes).all():
+        problem = "non-finite shape codes"
+    elif tuple(bounds.shape) != (2, 3) or not bounds.is_floating_point() or not torch.isfinite(bounds).all():
+        problem = f"bounds of shape {tuple(bounds.shape)}, expected a finite (2, 3) box"
+    if problem:
+        raise CenterArtError(f"{path}: not a valid centerart decoder checkpoint ({problem})")
+    return blob
 
 
 def load_shape_codes(path: Path) -> dict[str, np.ndarray]:

@@ -26,7 +26,7 @@ from centerart.errors import CenterArtError
 from centerart.recipe.config import STEPS, RecipeConfig
 from centerart.recipe.steps import STEP_TABLE, Paths, step_folders
 from centerart.utils.manifest import code_version, write_manifest
-from centerart.utils.parallel import init_ray
+from centerart.utils.parallel import init_ray, launcher_rank
 
 #: Fields of the stage configs that do not change what a step produces (processes, devices, progress bars).
 RESOURCE_KEYS = frozenset(
@@ -41,7 +41,7 @@ def run_recipe(cfg: RecipeConfig, echo=print) -> dict:
     out = Path(cfg.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     paths = Paths(out)
-    if global_rank() != 0:
+    if launcher_rank() != 0:
         follow(cfg, paths, echo)
         return {}
     manifest = load_manifest(out)
@@ -113,14 +113,6 @@ def check_config(cfg: RecipeConfig) -> None:
 
 def _launched_externally() -> bool:
     return any(k in os.environ for k in ("RANK", "SLURM_PROCID", "LOCAL_RANK", "OMPI_COMM_WORLD_RANK"))
-
-
-def global_rank() -> int:
-    """This process's global rank when a cluster launcher started several (torchrun: RANK; SLURM: SLURM_PROCID)."""
-    for key in ("RANK", "SLURM_PROCID", "OMPI_COMM_WORLD_RANK"):
-        if key in os.environ:
-            return int(os.environ[key])
-    return 0
 
 
 def usable_record(name: str, records: dict, paths: Paths, planned: dict) -> dict | None:
@@ -227,7 +219,7 @@ def follow(cfg: RecipeConfig, paths: Paths, echo=print) -> None:
         while True:
             record = load_manifest(paths.out).get("steps", {}).get(name)
             if record and record["status"] == "running":
-                echo(f"rank {global_rank()}: joining the {name} step")
+                echo(f"rank {launcher_rank()}: joining the {name} step")
                 step.run(cfg, paths, step.plan(cfg, paths))
                 break
             if record and record["status"] == "done":

@@ -41,8 +41,11 @@ from centerart.scenes.collisions import check_scene
 from centerart.scenes.description import SceneDescription
 from centerart.scenes.layouts import AssetEntry, sample_scene
 from centerart.scenes.textures import make_texture, write_texture
-from centerart.utils.atomic import atomic_directory, atomic_write_json, remove_stale_temporaries
-from centerart.utils.manifest import write_manifest
+from centerart.utils.atomic import atomic_directory, atomic_write_json
+from centerart.utils.checks import at_least, interval, workers
+from centerart.utils.folders import check_output_folder, output_folder
+from centerart.utils.json_schema import array, json_problem, optional
+from centerart.utils.manifest import merge_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng
 
@@ -90,6 +93,15 @@ class GenerateScenesConfig:
     """Parallel worker processes (default: all cores). Each compiles SAPIEN's shaders once (a few seconds)."""
     ray_address: str | None = None
     """Ray cluster address (e.g. auto or ray://host:10001) to run scenes on a cluster instead of local processes."""
+
+    def __post_init__(self):
+        at_least("--count", self.count, 0)
+        at_least("--views-per-scene", self.views_per_scene, 1)
+        at_least("--rt-samples-per-pixel", self.rt_samples_per_pixel, 1)
+        interval("--radius-m", self.radius_m, lo=0.0, strict_lo=True)
+        interval("--elevation-deg", self.elevation_deg, lo=-90.0, hi=90.0)
+        interval("--azimuth-deg", self.azimuth_deg, lo=-180.0, hi=180.0)
+        workers("--workers", self.workers)
 
 
 # ---------------------------------------------------------------------------- asset index
@@ -255,37 +267,33 @@ def _generate_one(job: tuple) -> dict:
 
 
 def generate_scenes(cfg: GenerateScenesConfig) -> dict:
-    """Generate (or complete) the scene dataset described by ``cfg``; returns the manifest fields."""
-    if cfg.count < 0 or cfg.views_per_scene < 1:
-        raise CenterArtError("--count must be >= 0 and --views-per-scene >= 1")
+    """Generate (or complete) the scene dataset described by ``cfg``; returns the manifest fields (counts and
+    scene rows of every scene in the folder, earlier runs' included)."""
+    check_output_folder(cfg.out)
     if cfg.decoder_checkpoint is not None:
         load_decoder_shape_codes(cfg.decoder_checkpoint)  # fail early, in the parent, with a clear message
     entries = asset_index(cfg.objects)
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)
+    out = output_folder(cfg.out)
     started = time.perf_counter()
     cfg_dict = {k: v for k, v in asdict(cfg).items()}
     jobs = [(cfg_dict, i, entries) for i in range(cfg.count)]
-    records = sorted(
-        parallel_map(_generate_one, jobs, cfg.workers, desc="scenes", ray_address=cfg.ray_address),
-        key=lambda r: r["scene"],
-    )
-    images = sum(len(r.get("views", [])) for r in records)
-    fields = {
-        "seed": cfg.seed,
-        "counts": {
-            "scenes": len(records),
-            "images": images,
-            "rejected_layouts": int(sum(len(r.get("rejected", [])) for r in records)),
-            "objects_available": len(entries),
-        },
-        "wall_seconds_this_run": round(time.perf_counter() - started, 1),
-        "assets": [asdict(e) for e in entries],
-        "scenes": records,
+    records = parallel_map(_generate_one, jobs, cfg.workers, desc="scenes", ray_address=cfg.ray_address)
+    return merge_manifest(
+        out, "scenes", cfg, "scenes", list(records), key=lambda r: r["scene"],
+        summarize=lambda rows: {"counts": _counts(rows, entries)},
+        present=lambda r: (out / r["scene"] / "scene.json").is_file(),
+        seed=cfg.seed, wall_seconds_this_run=round(time.perf_counter() - started, 1),
+        assets=[asdict(e) for e in entries],
+    )  # fmt: skip
+
+
+def _counts(records: list[dict], entries: list[AssetEntry]) -> dict:
+    return {
+        "scenes": len(records),
+        "images": sum(len(r.get("views", [])) for r in records),
+        "rejected_layouts": int(sum(len(r.get("rejected", [])) for r in records)),
+        "objects_available": len(entries),
     }
-    write_manifest(out, "scenes", cfg, **fields)
-    return fields
 
 
 # ---------------------------------------------------------------------------- reading
@@ -302,25 +310,66 @@ class SceneView:
     labels: dict
 
 
+#: What readers of ``labels.json`` rely on (the file holds more); checked when a view is read.
+JOINT_LABEL_SCHEMA = {"type": str, "state": float, "state_normalized": float, "range": array(2),
+                      "axis_origin_camera": array(3), "axis_direction_camera": array(3)}  # fmt: skip
+OBJECT_LABEL_SCHEMA = {"instance": int, "object_id": str, "category": str, "camera_T_object": array(4, 4),
+                       "joint": JOINT_LABEL_SCHEMA, "visible_fraction": float, "bbox_xyxy": array(4),
+                       "heatmap_gaussian": {"mean_uv": array(2), "cov_uv": array(2, 2)},
+                       "shape_code?": optional(array(None))}  # fmt: skip
+LABELS_SCHEMA = {"width": int, "height": int, "K": array(3, 3), "world_T_camera": array(4, 4),
+                 "objects": [OBJECT_LABEL_SCHEMA]}  # fmt: skip
+
+
+def read_view_labels(view_dir: Path) -> dict:
+    """A view's ``labels.json``, checked against :data:`LABELS_SCHEMA` (one error naming the file and field)."""
+    path = Path(view_dir) / "labels.json"
+    try:
+        labels = json.loads(path.read_text())
+    except (OSError, ValueError) as err:  # ValueError: malformed JSON, or binary bytes
+        raise CenterArtError(f"{path}: not a readable labels file ({str(err).splitlines()[0]})") from None
+    problem = json_problem(labels, LABELS_SCHEMA)
+    if problem:
+        raise CenterArtError(f"{path}: not a valid labels file ({problem})")
+    return labels
+
+
+def read_png(path: Path) -> np.ndarray:
+    """An image of a rendered view as an array; a damaged file is one error naming it."""
+    try:
+        with Image.open(path) as im:
+            return np.asarray(im)
+    except (OSError, ValueError, SyntaxError) as err:  # PIL: UnidentifiedImageError (OSError), truncated data
+        raise CenterArtError(f"{path}: not a readable image ({str(err).splitlines()[0]})") from None
+
+
+def check_view_files(view_dir: Path, images: tuple[str, ...] = ("rgb.png", "depth_true.png")) -> None:
+    """Labels readable and images intact (PNG chunks and checksums verified, pixels not decoded): a dataset is
+    checked before training starts instead of failing inside a data-loader worker."""
+    read_view_labels(view_dir)
+    for name in images:
+        path = Path(view_dir) / name
+        try:
+            with Image.open(path) as im:
+                im.verify()
+        except (OSError, ValueError, SyntaxError) as err:
+            raise CenterArtError(f"{path}: not a readable image ({str(err).splitlines()[0]})") from None
+
+
 def load_view(view_dir: Path) -> SceneView:
     view_dir = Path(view_dir)
     if not (view_dir / "labels.json").is_file():
         raise CenterArtError(f"{view_dir}: not a rendered view (no labels.json)")
-
-    def img(name):
-        return np.asarray(Image.open(view_dir / name))
-
+    labels = read_view_labels(view_dir)
     realistic = view_dir / "depth_realistic.png"
     return SceneView(
-        rgb=img("rgb.png"),
-        depth_true=img("depth_true.png").astype(np.float32) / DEPTH_SCALE_MM,
-        depth_realistic=(
-            np.asarray(Image.open(realistic)).astype(np.float32) / DEPTH_SCALE_MM if realistic.is_file() else None
-        ),
-        instances=img("instances.png"),
-        links=img("links.png"),
-        heatmap=img("heatmap.png").astype(np.float32) / HEATMAP_SCALE,
-        labels=json.loads((view_dir / "labels.json").read_text()),
+        rgb=read_png(view_dir / "rgb.png"),
+        depth_true=read_png(view_dir / "depth_true.png").astype(np.float32) / DEPTH_SCALE_MM,
+        depth_realistic=read_png(realistic).astype(np.float32) / DEPTH_SCALE_MM if realistic.is_file() else None,
+        instances=read_png(view_dir / "instances.png"),
+        links=read_png(view_dir / "links.png"),
+        heatmap=read_png(view_dir / "heatmap.png").astype(np.float32) / HEATMAP_SCALE,
+        labels=labels,
     )
 
 

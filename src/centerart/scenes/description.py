@@ -24,6 +24,7 @@ import numpy as np
 
 from centerart.errors import CenterArtError
 from centerart.utils.atomic import atomic_write_json
+from centerart.utils.json_schema import ANY, array, json_problem, optional
 
 SCENE_FORMAT_VERSION = 1
 
@@ -159,8 +160,10 @@ class SceneDescription:
             data = json.loads(path.read_text())
         except FileNotFoundError:
             raise CenterArtError(f"{path}: no such scene file") from None
-        except json.JSONDecodeError as err:
+        except ValueError as err:  # JSONDecodeError, or UnicodeDecodeError for binary bytes
             raise CenterArtError(f"{path}: malformed JSON: {err}") from None
+        if not isinstance(data, dict):
+            raise CenterArtError(f"{path}: not a valid scene description (expected a JSON object)")
         if data.get("format_version") != SCENE_FORMAT_VERSION:
             raise CenterArtError(
                 f"{path}: scene format version {data.get('format_version')!r}, this code reads {SCENE_FORMAT_VERSION}"
@@ -182,14 +185,16 @@ class SceneDescription:
         return np.asarray(self.cameras[index].world_T_camera, dtype=float)
 
 
-def _build(cls, data):
-    """Construct nested dataclasses from a dictionary made by ``asdict``."""
+def _build(cls, data, where: str = ""):
+    """Construct nested dataclasses from a dictionary made by ``asdict``, checking every value's type (numbers
+    finite, poses and matrices rectangular); a wrong one is a ValueError naming the field."""
+    if not isinstance(data, dict):
+        raise ValueError(f"{where or cls.__name__}: expected an object, got {type(data).__name__}")
     kwargs = {}
     for f in fields(cls):
         if f.name not in data:
             continue
-        value = data[f.name]
-        kwargs[f.name] = _convert(f.type, value)
+        kwargs[f.name] = _convert(f.type, data[f.name], f"{where}.{f.name}" if where else f.name)
     return cls(**kwargs)
 
 
@@ -201,17 +206,39 @@ _NESTED = {
     "CameraSpec": CameraSpec,
     "StereoSpec": StereoSpec,
 }
+#: Schemas (utils/json_schema.py) of the plain field types used in the description.
+_PLAIN = {
+    "str": str,
+    "int": int,
+    "float": float,
+    "bool": bool,
+    "list[float]": array(None),
+    "list[list[float]]": array(None, None),
+    "str | None": optional(str),
+}
 
 
-def _convert(type_name: str, value):
+def _convert(type_name: str, value, where: str):
     t = str(type_name)
     for name, klass in _NESTED.items():
         if t == name:
-            return _build(klass, value)
+            return _build(klass, value, where)
         if t == f"list[{name}]":
-            return [_build(klass, v) for v in value]
+            if not isinstance(value, list):
+                raise ValueError(f"{where}: expected a list, got {type(value).__name__}")
+            return [_build(klass, v, f"{where}[{i}]") for i, v in enumerate(value)]
         if t == f"dict[str, {name}]":
-            return {k: _build(klass, v) for k, v in value.items()}
+            if not isinstance(value, dict):
+                raise ValueError(f"{where}: expected an object, got {type(value).__name__}")
+            return {k: _build(klass, v, f"{where}.{k}") for k, v in value.items()}
+    if t == "dict[str, float]":
+        problem = json_problem(value, dict, where) or next(
+            (p for k, v in value.items() if (p := json_problem(v, float, f"{where}.{k}"))), None
+        )
+    else:
+        problem = json_problem(value, _PLAIN.get(t, ANY), where)
+    if problem:
+        raise ValueError(problem)
     return value
 
 

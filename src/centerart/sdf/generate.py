@@ -30,7 +30,9 @@ from centerart.sdf.samples import SdfSamples, sample_path
 from centerart.sdf.sampling import SamplingConfig, sample_points, signed_distance
 from centerart.sdf.surface import object_surface
 from centerart.utils.atomic import atomic_write_json, remove_stale_temporaries
-from centerart.utils.manifest import write_manifest
+from centerart.utils.checks import at_least, workers
+from centerart.utils.folders import check_output_folder, output_folder
+from centerart.utils.manifest import merge_manifest
 from centerart.utils.parallel import parallel_map
 from centerart.utils.seeding import item_rng
 
@@ -63,6 +65,30 @@ class GenerateSdfConfig:
     sampling: SamplingConfig = field(default_factory=SamplingConfig)
     """Point mix and sign methods."""
 
+    def __post_init__(self):
+        at_least("--points", self.points, 1)
+        at_least("--states", self.states, 1)
+        workers("--workers", self.workers)
+        _check_sampling(self.sampling)
+
+
+def _check_sampling(s: SamplingConfig) -> None:
+    if not (0 <= s.near_fraction and 0 <= s.far_fraction and s.near_fraction + s.far_fraction <= 1):
+        raise CenterArtError("--sampling.near-fraction and --sampling.far-fraction must be >= 0 and sum to <= 1")
+    if s.parity_rays < 1 or s.parity_rays % 2 == 0:
+        raise CenterArtError(f"--sampling.parity-rays must be odd and >= 1, got {s.parity_rays}")
+    if s.escape_rays < 1 or s.flood_cells < 8 or s.flood_thin_cells < 2 or s.check_points < 1:
+        raise CenterArtError(
+            "--sampling.escape-rays, --sampling.flood-cells (>= 8), --sampling.flood-thin-cells (>= 2), "
+            "--sampling.check-points must be positive"
+        )
+    if s.flood_max_voxels < 1000 or s.escape_min_rays < 1:
+        raise CenterArtError("--sampling.flood-max-voxels must be >= 1000 and --sampling.escape-min-rays >= 1")
+    if s.escape_opening_spacing < 0 or s.escape_opening_offset <= 0:
+        raise CenterArtError(
+            "--sampling.escape-opening-spacing must be >= 0 (0: no aimed rays) and --sampling.escape-opening-offset > 0"
+        )
+
 
 @dataclass(frozen=True)
 class _Item:
@@ -83,26 +109,8 @@ def _plan(cfg: GenerateSdfConfig) -> list[_Item]:
         raise CenterArtError(f"{objects_dir}: objects folder does not exist")
     if not grasps_dir.is_dir():
         raise CenterArtError(f"{grasps_dir}: grasp-label folder does not exist")
-    if cfg.points < 1:
-        raise CenterArtError(f"--points must be >= 1, got {cfg.points}")
-    if cfg.states < 1:
-        raise CenterArtError(f"--states must be >= 1, got {cfg.states}")
+    check_output_folder(cfg.out)
     s = cfg.sampling
-    if not (0 <= s.near_fraction and 0 <= s.far_fraction and s.near_fraction + s.far_fraction <= 1):
-        raise CenterArtError("--sampling.near-fraction and --sampling.far-fraction must be >= 0 and sum to <= 1")
-    if s.parity_rays < 1 or s.parity_rays % 2 == 0:
-        raise CenterArtError(f"--sampling.parity-rays must be odd and >= 1, got {s.parity_rays}")
-    if s.escape_rays < 1 or s.flood_cells < 8 or s.flood_thin_cells < 2 or s.check_points < 1:
-        raise CenterArtError(
-            "--sampling.escape-rays, --sampling.flood-cells (>= 8), --sampling.flood-thin-cells (>= 2), "
-            "--sampling.check-points must be positive"
-        )
-    if s.flood_max_voxels < 1000 or s.escape_min_rays < 1:
-        raise CenterArtError("--sampling.flood-max-voxels must be >= 1000 and --sampling.escape-min-rays >= 1")
-    if s.escape_opening_spacing < 0 or s.escape_opening_offset <= 0:
-        raise CenterArtError(
-            "--sampling.escape-opening-spacing must be >= 0 (0: no aimed rays) and --sampling.escape-opening-offset > 0"
-        )
     items = []
     for folder in list_objects(objects_dir):
         oid = folder.name
@@ -118,6 +126,16 @@ def _plan(cfg: GenerateSdfConfig) -> list[_Item]:
             for k in range(cfg.states):
                 items.append(_Item(str(folder), oid, k, cfg.states, None, str(cfg.out), cfg.seed, cfg.points, s))
     return items
+
+
+def _check_inputs(items: list[_Item]) -> None:
+    """Load every object and label file once, in this process, before anything is written: a damaged one is a
+    clear error here instead of an empty output folder and a worker's failure."""
+    for folder in sorted({it.object_dir for it in items}):
+        ArticulatedObject.load(folder)
+    for it in items:
+        if it.label_file is not None:
+            StateLabels.load(Path(it.label_file))
 
 
 def _stats_path(out: Path, object_id: str, state_index: int) -> Path:
@@ -213,24 +231,27 @@ def _generate_one_unchecked(item: _Item) -> dict:
 
 
 def generate_sdf(cfg: GenerateSdfConfig, progress: bool = True) -> dict:
-    """Generate (or complete) the SDF dataset described by ``cfg``; returns the manifest's summary fields."""
+    """Generate (or complete) the SDF dataset described by ``cfg``; returns the manifest's summary fields (of
+    every state in the folder, earlier runs' included)."""
     items = _plan(cfg)
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)
+    _check_inputs(items)
+    out = output_folder(cfg.out)
     for oid in {it.object_id for it in items}:
         remove_stale_temporaries(out / oid)
-    rows = sorted(
-        parallel_map(
-            _generate_one,
-            items,
-            cfg.workers,
-            desc="sdf states",
-            ray_address=cfg.ray_address,
-            disable_progress=not progress,
-        ),
-        key=lambda r: (r["object_id"], r["state_index"]),
+    rows = parallel_map(
+        _generate_one, items, cfg.workers, "sdf states", ray_address=cfg.ray_address, disable_progress=not progress
     )
+    rows = [{k: v for k, v in r.items() if k != "config"} for r in rows]
+    written = merge_manifest(
+        out, "sdf", cfg, "states", rows, key=lambda r: (r["object_id"], r["state_index"]), summarize=_summary,
+        present=lambda r: sample_path(out, r["object_id"], r["state_index"]).is_file(),
+        seed=cfg.seed, min_sign_agreement=MIN_SIGN_AGREEMENT,
+    )  # fmt: skip
+    return {k: written[k] for k in ("seed", "min_sign_agreement", "counts", "objects")}
+
+
+def _summary(rows: list[dict]) -> dict:
+    """Counts and per-object sign agreement of the manifest's state rows."""
     per_object: dict[str, dict] = {}
     for r in rows:
         o = per_object.setdefault(
@@ -256,7 +277,4 @@ def generate_sdf(cfg: GenerateSdfConfig, progress: bool = True) -> dict:
             k for k, o in per_object.items() if not o["meets_min_sign_agreement"]
         ),
     }
-    summary = {"seed": cfg.seed, "min_sign_agreement": MIN_SIGN_AGREEMENT, "counts": counts, "objects": per_object}
-    rows = [{k: v for k, v in r.items() if k != "config"} for r in rows]
-    write_manifest(out, "sdf", cfg, **summary, states=rows)
-    return summary
+    return {"counts": counts, "objects": per_object}

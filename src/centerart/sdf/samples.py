@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 from tqdm import tqdm
@@ -44,6 +45,11 @@ from centerart.utils.seeding import item_rng
 
 @dataclass
 class SdfSamples:
+    #: Checks of a file's arrays when it is read (utils/npz_records.py); grasp_distance is inf without labels.
+    SHAPES: ClassVar[dict] = {"points": ("N", 3), "sdf": ("N",), "grasp_points": ("N", 5, 3), "grasp_distance": ("N",)}
+    FINITE: ClassVar[tuple] = ("points", "sdf", "grasp_points")
+    NO_NAN: ClassVar[tuple] = ("grasp_distance",)
+
     object_id: str
     state_index: int
     q: float
@@ -91,12 +97,8 @@ def load_states(folder: Path, max_points: int | None = None, seed: int = 0, prog
     """Every SDF sample file under ``folder``; each keeps a seeded random subset of ``max_points`` points."""
     states = []
     for path in tqdm(list_sample_files(folder), desc="load sdf samples", disable=not progress):
-        s = SdfSamples.load(path)
+        s = SdfSamples.load(path)  # shapes and finiteness checked on reading
         n = len(s.points)
-        if s.sdf.shape != (n,) or s.grasp_points.shape != (n, 5, 3) or s.grasp_distance.shape != (n,):
-            raise CenterArtError(f"{path}: inconsistent array shapes in SDF sample file")
-        if not np.isfinite(s.points).all() or not np.isfinite(s.sdf).all():
-            raise CenterArtError(f"{path}: non-finite points or SDF values")
         idx = np.arange(n)
         if max_points is not None and n > max_points:
             idx = np.sort(item_rng(seed, "subsample", s.object_id, s.state_index).choice(n, max_points, replace=False))

@@ -14,14 +14,20 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from PIL import Image
 from torch.utils.data import Dataset
 
 from centerart.errors import CenterArtError
 from centerart.geometry.camera import Intrinsics
 from centerart.models.encoder.config import EncoderConfig
 from centerart.models.encoder.inputs import Letterbox, to_tensors
-from centerart.scenes.dataset import DEPTH_SCALE_MM, SceneView, list_views
+from centerart.scenes.dataset import (
+    DEPTH_SCALE_MM,
+    SceneView,
+    check_view_files,
+    list_views,
+    read_png,
+    read_view_labels,
+)
 from centerart.training.encoder_augment import AugmentConfig, choose_depth, jitter_colour, random_letterbox
 from centerart.training.encoder_targets import build_targets
 
@@ -46,18 +52,25 @@ def collect_views(folders: list[Path]) -> list[Path]:
     return views
 
 
+def checked_views(folders: list[Path]) -> list[Path]:
+    """:func:`collect_views`, each view's labels and images checked (see
+    :func:`~centerart.scenes.dataset.check_view_files`), so a damaged view stops training before it starts."""
+    views = collect_views(folders)
+    for view in views:
+        check_view_files(view)
+    return views
+
+
 def load_view_for_encoder(view_dir: Path) -> SceneView:
     """The parts of a rendered view the encoder trains on (RGB, true and realistic depth in m, labels); the
     masks and the stored heatmap are skipped: targets are rebuilt from the labels at the input's scale."""
     view_dir = Path(view_dir)
-    try:
-        labels = json.loads((view_dir / "labels.json").read_text())
-        rgb = np.asarray(Image.open(view_dir / "rgb.png").convert("RGB"))
-        depth_true = np.asarray(Image.open(view_dir / "depth_true.png"), np.float32) / DEPTH_SCALE_MM
-        realistic = view_dir / "depth_realistic.png"
-        depth_real = np.asarray(Image.open(realistic), np.float32) / DEPTH_SCALE_MM if realistic.is_file() else None
-    except (OSError, ValueError) as err:
-        raise CenterArtError(f"{view_dir}: unreadable view ({err})") from None
+    labels = read_view_labels(view_dir)
+    rgb = read_png(view_dir / "rgb.png")
+    rgb = rgb[..., :3] if rgb.ndim == 3 else np.repeat(rgb[..., None], 3, axis=2)
+    depth_true = read_png(view_dir / "depth_true.png").astype(np.float32) / DEPTH_SCALE_MM
+    realistic = view_dir / "depth_realistic.png"
+    depth_real = read_png(realistic).astype(np.float32) / DEPTH_SCALE_MM if realistic.is_file() else None
     return SceneView(rgb, depth_true, depth_real, None, None, None, labels)
 
 

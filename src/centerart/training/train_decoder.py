@@ -13,13 +13,14 @@ Training runs on CPU, one GPU, or several devices / nodes with DDP (``--devices`
 ``--strategy``), the same code. Every process holds every shape code (one ``nn.Embedding``); DDP averages the
 gradients of all parameters, codes included: an object's code gets the gradient of whichever processes drew it in
 a step (zero from the others), and since each process's loss is a mean over its batch, the average is exactly the
-gradient of one process holding the combined batch. Only global rank 0 writes the exported files.
+gradient of one process holding the combined batch. Only global rank 0 holds OUT's lock and writes the exports.
 """
 
 from __future__ import annotations
 
 import json
 import time
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
@@ -31,7 +32,11 @@ from centerart.errors import CenterArtError
 from centerart.models.code_fitting import CodeFitConfig
 from centerart.models.decoder import PRESETS, DecoderConfig
 from centerart.models.losses import GraspWeighting, LossConfig
+from centerart.training.resume import resume_checkpoint
 from centerart.utils.atomic import atomic_write_json
+from centerart.utils.checks import at_least, between, positive
+from centerart.utils.folders import check_output_folder, folder_lock
+from centerart.utils.parallel import launcher_rank
 
 if TYPE_CHECKING:
     from centerart.sdf.samples import StateData
@@ -82,6 +87,19 @@ class TrainDecoderConfig:
     decoder_overrides: dict[str, int | float | bool] = field(default_factory=dict)
     """Override preset fields, e.g. width/depth (Python API; the CLI takes the presets)."""
 
+    def __post_init__(self):
+        for name in ("epochs", "batch_items", "points_per_item", "min_items_per_epoch", "max_points_per_state"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 1)
+        at_least("--val-every", self.val_every, 1)
+        at_least("--val-code-fit-steps", self.val_code_fit_steps, 0)
+        at_least("--heldout-states-per-object", self.heldout_states_per_object, 0)
+        at_least("--threads", self.threads, 0)
+        at_least("--devices", self.devices, 1)
+        at_least("--num-nodes", self.num_nodes, 1)
+        for name in ("lr_decoder", "lr_codes", "sdf_weight"):
+            positive(f"--{name.replace('_', '-')}", getattr(self, name))
+        between("--heldout-object-fraction", self.heldout_object_fraction, 0.0, 0.9)
+
     def decoder_config(self) -> DecoderConfig:
         from dataclasses import replace
 
@@ -104,50 +122,42 @@ class _Data:
 
 
 def train_decoder(cfg: TrainDecoderConfig) -> dict:
-    """Train on ``cfg.data``, export ``decoder.pt`` and return {checkpoint, metrics, split} (see the module doc)."""
+    """Train on ``cfg.data``, export ``decoder.pt`` and return {checkpoint, metrics, split} (see the module doc).
+
+    Everything that can be wrong with the inputs (data, a resume checkpoint, --out) is checked before the first
+    file is written, and the run holds OUT's lock, so a second run into the same OUT refuses instead of mixing in.
+    """
     import lightning as L
 
     from centerart.training.decoder_module import DecoderModule
 
     if not Path(cfg.data).is_dir():
         raise CenterArtError(f"{cfg.data}: SDF data folder not found")
+    out = check_output_folder(cfg.out)
     if cfg.threads > 0:
         torch.set_num_threads(cfg.threads)
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
     L.seed_everything(cfg.seed, workers=True, verbose=False)
-
     data = _load_data(cfg)
-    dcfg = cfg.decoder_config()
-    lcfg = cfg.loss_config()
-    atomic_write_json(out / "config.json", {**asdict(cfg), "decoder": dcfg.to_dict(), "loss": asdict(lcfg)})
-    atomic_write_json(out / "split.json", data.split.to_dict())
-
+    dcfg, lcfg = cfg.decoder_config(), cfg.loss_config()
     module = DecoderModule(
-        dcfg,
-        lcfg,
-        data.split.train_objects,
-        cfg.lr_decoder,
-        cfg.lr_codes,
-        cfg.epochs,
-        heldout_object_states=data.heldout_objects,
-        code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, seed=cfg.seed),
-    )
-    train_loader, val_loader = _loaders(cfg, data)
-    trainer = _trainer(cfg, out)
-    last = out / "lightning" / "last.ckpt"
-    t0 = time.perf_counter()
-    trainer.fit(
-        module,
-        train_loader,
-        val_loader,
-        ckpt_path=str(last) if cfg.resume and last.is_file() else None,
-    )
-    seconds = time.perf_counter() - t0
-    if trainer.global_rank != 0:  # DDP launched per device (strategy ddp): rank 0 alone validates and exports
-        return {"checkpoint": None, "metrics": {}, "split": data.split}
-    metrics = _final_metrics(cfg, trainer, module, val_loader, data, seconds)
-    return _export(cfg, out, module, data, lcfg, metrics)
+        dcfg, lcfg, data.split.train_objects, cfg.lr_decoder, cfg.lr_codes, cfg.epochs,
+        heldout_object_states=data.heldout_objects, code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, seed=cfg.seed),
+    )  # fmt: skip
+    last = resume_checkpoint(out, cfg.resume, module)
+    out.mkdir(parents=True, exist_ok=True)
+    # Processes a launcher started besides rank 0 (strategy ddp) train into the same OUT without its lock.
+    with folder_lock(out, blocking=False) if launcher_rank() == 0 else nullcontext():
+        atomic_write_json(out / "config.json", {**asdict(cfg), "decoder": dcfg.to_dict(), "loss": asdict(lcfg)})
+        atomic_write_json(out / "split.json", data.split.to_dict())
+        train_loader, val_loader = _loaders(cfg, data)
+        trainer = _trainer(cfg, out)
+        t0 = time.perf_counter()
+        trainer.fit(module, train_loader, val_loader, ckpt_path=str(last) if last else None)
+        seconds = time.perf_counter() - t0
+        if trainer.global_rank != 0:  # rank 0 alone validates and exports
+            return {"checkpoint": None, "metrics": {}, "split": data.split}
+        metrics = _final_metrics(cfg, trainer, module, val_loader, data, seconds)
+        return _export(cfg, out, module, data, lcfg, metrics)
 
 
 def _load_data(cfg: TrainDecoderConfig) -> _Data:

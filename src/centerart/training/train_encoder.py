@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import time
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Literal
@@ -26,7 +27,11 @@ from centerart.errors import CenterArtError
 from centerart.models.encoder.config import PRESETS, EncoderConfig
 from centerart.models.encoder.losses import EncoderLossConfig
 from centerart.training.encoder_augment import AugmentConfig
+from centerart.training.resume import resume_checkpoint
 from centerart.utils.atomic import atomic_write_json
+from centerart.utils.checks import at_least, positive
+from centerart.utils.folders import check_output_folder, folder_lock
+from centerart.utils.parallel import launcher_rank
 
 
 @dataclass
@@ -66,6 +71,13 @@ class TrainEncoderConfig:
     encoder_overrides: dict[str, int | float | str] = field(default_factory=dict)
     """Override preset fields (Python API), e.g. input_width / input_height."""
 
+    def __post_init__(self):
+        for name in ("epochs", "batch_size", "val_every", "devices", "num_nodes"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 1)
+        for name in ("threads", "workers", "max_minutes"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 0)
+        positive("--lr", self.lr)
+
     def encoder_config(self, code_dim: int) -> EncoderConfig:
         return replace(PRESETS[self.preset], **{**self.encoder_overrides, "code_dim": code_dim})
 
@@ -87,9 +99,9 @@ def scene_object_fingerprints(views: list[Path]) -> dict[str, str | None]:
 def _loaders(cfg: TrainEncoderConfig, enc_cfg: EncoderConfig, codes: dict):
     from torch.utils.data import DataLoader
 
-    from centerart.training.encoder_data import EncoderViewDataset, collate, collect_views
+    from centerart.training.encoder_data import EncoderViewDataset, checked_views, collate
 
-    train_ds = EncoderViewDataset(collect_views(list(cfg.scenes)), enc_cfg, codes, cfg.augment, cfg.seed)
+    train_ds = EncoderViewDataset(checked_views(list(cfg.scenes)), enc_cfg, codes, cfg.augment, cfg.seed)
     if len(train_ds) < cfg.batch_size:
         raise CenterArtError(f"{len(train_ds)} training views, fewer than --batch-size {cfg.batch_size}")
     gen = torch.Generator().manual_seed(cfg.seed)
@@ -97,7 +109,7 @@ def _loaders(cfg: TrainEncoderConfig, enc_cfg: EncoderConfig, codes: dict):
     train = DataLoader(train_ds, shuffle=True, drop_last=True, generator=gen, **common)
     val = None
     if cfg.val_scenes:
-        val_ds = EncoderViewDataset(collect_views(list(cfg.val_scenes)), enc_cfg, codes, None, depth=cfg.val_depth)
+        val_ds = EncoderViewDataset(checked_views(list(cfg.val_scenes)), enc_cfg, codes, None, depth=cfg.val_depth)
         val = DataLoader(val_ds, shuffle=False, **common)
     return train, val
 
@@ -133,43 +145,57 @@ def _trainer(cfg: TrainEncoderConfig, out: Path, has_val: bool):
 
 
 def train_encoder(cfg: TrainEncoderConfig) -> dict:
-    """Train (or resume), validate, export ``OUT/encoder.pt``; returns the checkpoint path and metrics."""
+    """Train (or resume), validate, export ``OUT/encoder.pt``; returns the checkpoint path and metrics.
+
+    The decoder checkpoint, every view (labels and images), a resume checkpoint and --out are checked before the
+    first file is written; the run holds OUT's lock, so a second run into the same OUT refuses."""
     import lightning as L
 
     from centerart.models.checkpoint import default_checkpoint, load_shape_codes
-    from centerart.models.encoder.checkpoint import save_encoder
     from centerart.training.encoder_module import EncoderModule
 
     decoder_path = Path(cfg.decoder) if cfg.decoder is not None else default_checkpoint()
     codes = load_shape_codes(decoder_path)
+    out = check_output_folder(cfg.out)
     if cfg.threads > 0:
         torch.set_num_threads(cfg.threads)
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
     L.seed_everything(cfg.seed, workers=True, verbose=False)
     enc_cfg = cfg.encoder_config(code_dim=len(next(iter(codes.values()))))
     train_loader, val_loader = _loaders(cfg, enc_cfg, codes)
     config_dict = json.loads(json.dumps({**asdict(cfg), "encoder": enc_cfg.to_dict()}, default=str))
-    atomic_write_json(out / "config.json", config_dict)
-
     module = EncoderModule(enc_cfg, cfg.loss, cfg.lr, cfg.epochs, codes=codes)
-    trainer = _trainer(cfg, out, val_loader is not None)
-    last = out / "lightning" / "last.ckpt"
-    resumed = cfg.resume and last.is_file()
-    t0 = time.perf_counter()
-    trainer.fit(module, train_loader, val_loader, ckpt_path=str(last) if resumed else None)
-    seconds = time.perf_counter() - t0
-    if val_loader is not None:
-        trainer.validate(module, val_loader, verbose=False)  # final numbers with the final weights
-    if trainer.global_rank != 0:  # DDP launched per device (strategy ddp): rank 0 alone exports
-        return {"checkpoint": None, "metrics": {}}
+    last = resume_checkpoint(out, cfg.resume, module)
+    out.mkdir(parents=True, exist_ok=True)
+    # Processes a launcher started besides rank 0 (strategy ddp) train into the same OUT without its lock.
+    with folder_lock(out, blocking=False) if launcher_rank() == 0 else nullcontext():
+        atomic_write_json(out / "config.json", config_dict)
+        trainer = _trainer(cfg, out, val_loader is not None)
+        t0 = time.perf_counter()
+        trainer.fit(module, train_loader, val_loader, ckpt_path=str(last) if last else None)
+        seconds = time.perf_counter() - t0
+        if val_loader is not None:
+            trainer.validate(module, val_loader, verbose=False)  # final numbers with the final weights
+        if trainer.global_rank != 0:  # rank 0 alone exports
+            return {"checkpoint": None, "metrics": {}}
+        metrics = _metrics(cfg, trainer, seconds, resumed=last is not None)
+        return _export(cfg, out, module, decoder_path, codes, config_dict, metrics, train_loader.dataset.views)
+
+
+def _metrics(cfg: TrainEncoderConfig, trainer, seconds: float, resumed: bool) -> dict:
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
     images = trainer.global_step * cfg.batch_size * cfg.devices * cfg.num_nodes
     metrics.update(train_seconds_this_run=seconds, steps=trainer.global_step, epochs=trainer.current_epoch)
     metrics["resumed"] = bool(resumed)
     # A resumed run's global step counts earlier runs' steps too: no honest rate without the restored step count.
     metrics["train_images_per_second"] = None if resumed else images / max(seconds, 1e-9)
-    trained_on = scene_object_fingerprints(train_loader.dataset.views)
+    return metrics
+
+
+def _export(cfg, out: Path, module, decoder_path: Path, codes: dict, config_dict: dict, metrics: dict, views) -> dict:
+    """Write ``encoder.pt`` (with the fingerprints of the training scenes' objects) and ``metrics.json``."""
+    from centerart.models.encoder.checkpoint import save_encoder
+
+    trained_on = scene_object_fingerprints(views)
     path = save_encoder(
         out / "encoder.pt", module.encoder.cpu(), decoder_path, sorted(codes), config_dict, metrics, trained_on
     )

@@ -22,6 +22,15 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 
+def launcher_rank() -> int:
+    """This process's rank when a launcher started several copies of the command (torchrun: RANK; SLURM:
+    SLURM_PROCID; MPI; Lightning's own DDP launcher: LOCAL_RANK / NODE_RANK); 0 for a process started alone."""
+    for key in ("RANK", "SLURM_PROCID", "OMPI_COMM_WORLD_RANK"):
+        if key in os.environ:
+            return int(os.environ[key])
+    return int(os.environ.get("LOCAL_RANK", 0)) or int(os.environ.get("NODE_RANK", 0))
+
+
 def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
 

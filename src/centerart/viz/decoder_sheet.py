@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from centerart.errors import CenterArtError
+from centerart.utils.checks import at_least, finite
 from centerart.viz.contact_sheet import grid, labelled, save_png, titled
 
 MESH_COLOUR = (0.62, 0.7, 0.84, 1.0)  # light steel blue: apart from the floor and every marker
@@ -49,6 +50,14 @@ class ShowDecoderConfig:
     """Camera azimuth from +x (out of the front) towards +y, degrees."""
     image_width: int = 480
     image_height: int = 360
+
+    def __post_init__(self):
+        for name in ("states", "image_width", "image_height"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 1)
+        at_least("--top-k", self.top_k, 0)
+        at_least("--resolution", self.resolution, 8)
+        finite("--elev", self.elev)
+        finite("--azim", self.azim)
 
 
 def _shape_code(loaded, cfg: ShowDecoderConfig) -> tuple[np.ndarray, str]:

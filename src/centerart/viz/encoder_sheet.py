@@ -14,6 +14,7 @@ from typing import Literal
 import cv2
 import numpy as np
 
+from centerart.utils.checks import at_least
 from centerart.viz.contact_sheet import grid, labelled, save_png
 from centerart.viz.scenes_sheet import colorize_depth, draw_labels, heatmap_image
 
@@ -30,6 +31,10 @@ class ShowEncoderConfig:
     max_views: int = 6
     depth: Literal["realistic", "true"] = "realistic"
     tile_width: int = 360
+
+    def __post_init__(self):
+        at_least("--max-views", self.max_views, 1)
+        at_least("--tile-width", self.tile_width, 16)
 
 
 def detections_as_labels(dets, K: np.ndarray) -> dict:

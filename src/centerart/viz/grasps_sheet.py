@@ -16,6 +16,7 @@ import numpy as np
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.errors import CenterArtError
 from centerart.grasps.labels import StateLabels, load_object_labels
+from centerart.utils.checks import at_least
 from centerart.viz.contact_sheet import grid, labelled, save_png
 
 GREEN = (0.1, 0.85, 0.2, 1.0)  # successful labels
@@ -42,6 +43,12 @@ class ShowGraspsConfig:
     """Failed trials drawn per state in red."""
     image_width: int = 480
     image_height: int = 360
+
+    def __post_init__(self):
+        for name in ("states", "image_width", "image_height"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 1)
+        at_least("--grasps", self.grasps, 0)
+        at_least("--failures", self.failures, 0)
 
 
 def _pick(n_total: int, n: int) -> np.ndarray:

@@ -12,6 +12,7 @@ from tqdm.auto import tqdm
 
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.dataset import list_objects
+from centerart.utils.checks import at_least
 from centerart.viz.contact_sheet import grid, labelled, save_png
 
 
@@ -30,6 +31,10 @@ class ShowObjectsConfig:
     """Render at most this many objects (sorted by name)."""
     image_width: int = 240
     image_height: int = 180
+
+    def __post_init__(self):
+        for name in ("states", "objects_per_row", "max_objects", "image_width", "image_height"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 1)
 
 
 def show_objects(cfg: ShowObjectsConfig) -> Path:

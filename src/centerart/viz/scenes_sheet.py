@@ -16,6 +16,7 @@ import numpy as np
 import tyro
 
 from centerart.geometry.camera import project
+from centerart.utils.checks import at_least
 from centerart.viz.contact_sheet import grid, labelled, save_png
 
 PALETTE = np.array(
@@ -45,6 +46,10 @@ class ShowScenesConfig:
     """Show at most this many views (sorted by scene and view)."""
     tile_width: int = 400
     """Width of each tile in pixels (height follows the image aspect)."""
+
+    def __post_init__(self):
+        at_least("--max-views", self.max_views, 1)
+        at_least("--tile-width", self.tile_width, 16)
 
 
 def colorize_depth(depth: np.ndarray, lo: float, hi: float) -> np.ndarray:

@@ -29,6 +29,7 @@ from centerart.errors import CenterArtError
 from centerart.geometry.rotations import quat_from_matrix
 from centerart.grasps.gripper import FINGERTIP_BEYOND_TCP, MAX_OPENING, PALM_TO_TCP, gripper_mesh
 from centerart.inference.prediction_io import read_predictions
+from centerart.utils.checks import at_least, between, positive
 
 #: Columns: the OpenCV camera axes (x right, y down, z forward) in viser's z-up world (x right, y forward, z up).
 WORLD_R_CAMERA = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
@@ -71,6 +72,13 @@ class ViewConfig:
     """Point size in metres (the GUI slider changes it)."""
     mesh_opacity: float = 0.8
     """Object mesh opacity, 0..1 (the GUI slider changes it); below 1 the frames and grasps inside show."""
+
+    def __post_init__(self):
+        at_least("--top-k", self.top_k, 0)
+        at_least("--resolution", self.resolution, 8)
+        at_least("--max-points", self.max_points, 1)
+        positive("--point-size", self.point_size)
+        between("--mesh-opacity", self.mesh_opacity, 0.0, 1.0)
 
 
 @dataclass
@@ -123,7 +131,7 @@ def load_points(folder: Path, data: dict, max_points: int) -> tuple[np.ndarray, 
         try:
             cloud = trimesh.load(ply, process=False)
         except Exception as err:  # trimesh raises many types for bad files
-            raise CenterArtError(f"{ply}: not a readable point cloud ({type(err).__name__}: {err})") from None
+            raise CenterArtError(f"{ply}: not a readable point cloud ({_first_line(err)})") from None
         points = np.asarray(cloud.vertices, float)
         vc = getattr(cloud, "colors", None)
         if vc is None or len(vc) != len(points):
@@ -131,15 +139,14 @@ def load_points(folder: Path, data: dict, max_points: int) -> tuple[np.ndarray, 
         if vc is not None and len(vc) == len(points):
             colors = np.asarray(vc)[:, :3].astype(np.uint8)
     elif depth_file.suffix == ".npy" and depth_file.is_file() and "image" in data:
-        from PIL import Image
-
         from centerart.geometry.camera import backproject_depth
+        from centerart.inference.inputs import read_depth, read_rgb
 
-        depth = np.load(depth_file)
+        depth = read_depth(depth_file)
         points, uv = backproject_depth(depth, np.asarray(data["image"]["K"], float), return_pixels=True)
         rgb_file = folder / inputs.get("rgb", "rgb.png")
         if rgb_file.is_file():
-            rgb = np.asarray(Image.open(rgb_file).convert("RGB"))
+            rgb = read_rgb(rgb_file)
             if rgb.shape[:2] == depth.shape:
                 colors = rgb[uv[:, 1], uv[:, 0]]
     if colors is None:
@@ -148,11 +155,16 @@ def load_points(folder: Path, data: dict, max_points: int) -> tuple[np.ndarray, 
     return points[::step], colors[::step]
 
 
+def _first_line(err: Exception) -> str:
+    text = str(err).strip()
+    return f"{type(err).__name__}: {text.splitlines()[0]}" if text else type(err).__name__
+
+
 def load_mesh(path: Path) -> trimesh.Trimesh:
     try:
         mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as err:  # trimesh raises many types for bad files
-        raise CenterArtError(f"{path}: not a readable mesh ({type(err).__name__}: {err})") from None
+        raise CenterArtError(f"{path}: not a readable mesh ({_first_line(err)})") from None
     return mesh
 
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from centerart.errors import CenterArtError
-from centerart.models.checkpoint_files import read_blob, write_blob
+from centerart.models.checkpoint_files import check_fields, read_blob, write_blob
 from centerart.models.encoder.config import EncoderConfig
 from centerart.models.encoder.network import RGBDEncoder
 
@@ -63,7 +63,9 @@ def save_encoder(
 
 
 def _read(path: Path) -> dict:
-    return read_blob(path, FORMAT, VERSION, "encoder")
+    blob = read_blob(path, FORMAT, VERSION, "encoder")
+    check_fields(blob, path, "encoder", {"encoder_config": dict, "state_dict": dict, "decoder": dict})
+    return blob
 
 
 def load_encoder(path: Path | None = None, decoder_path: Path | None = None, device="cpu") -> LoadedEncoder:
