@@ -21,6 +21,16 @@ PARTNET_SAMPLES = Path(
 )
 
 
+@pytest.fixture
+def ray_shut_down_afterwards():
+    """Leave no Ray instance behind, even when the run under test fails half-way (the grasps and recipe tests)."""
+    import ray  # the `cluster` extra; scripts/setup.sh --dev installs it
+
+    yield
+    if ray.is_initialized():
+        ray.shutdown()
+
+
 @pytest.fixture(scope="session")
 def partnet_dir() -> Path:
     if not PARTNET_SAMPLES.is_dir():

@@ -2,7 +2,8 @@
 
 Order, bottom to top: ``geometry``, ``utils`` and ``errors`` (the foundation; they import no stage), then
 ``assets`` -> ``grasps`` -> ``sdf`` -> ``models`` -> ``scenes`` -> ``training`` -> ``inference`` ->
-``evaluation``. ``viz`` (pictures) and ``cli``, ``commands``, ``demo``, ``predict`` sit on top and may import anything.
+``evaluation``. ``viz`` (pictures) and ``cli``, ``commands``, ``demo``, ``predict``, ``recipe`` sit on top and may
+import anything.
 Every import counts, including the ones inside functions (they are what keeps the CLI cheap to start, not a
 way around the order).
 """
@@ -17,7 +18,7 @@ import centerart
 PACKAGE = Path(centerart.__file__).parent
 FOUNDATION = ("geometry", "utils", "errors")
 PIPELINE = ("assets", "grasps", "sdf", "models", "scenes", "training", "inference", "evaluation")
-TOP = ("viz", "cli", "commands", "demo", "predict")
+TOP = ("viz", "cli", "commands", "demo", "predict", "recipe")
 RANK = {**dict.fromkeys(FOUNDATION, 0), **{name: i + 1 for i, name in enumerate(PIPELINE)}}
 
 

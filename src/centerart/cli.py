@@ -21,6 +21,7 @@ class Command:
     config: str  # "module:ConfigDataclass"
     run: str  # "module:function(config)"
     help: str
+    default: str | None = None  # "module:function(argv)": the config's defaults for this command line (presets)
 
 
 def _resolve(ref: str):
@@ -124,6 +125,14 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "the main job on its built-in default (see README quick start)",
         )
     },
+    "recipe": {
+        "": Command(
+            "centerart.recipe.config:RecipeConfig",
+            "centerart.commands:recipe",
+            "objects -> labels -> SDF -> decoder -> scenes -> encoder -> evaluation in one resumable command",
+            default="centerart.recipe.config:cli_default",
+        )
+    },
     "view": {
         "": Command(
             "centerart.viz.viewer:ViewConfig",
@@ -166,7 +175,8 @@ def main(argv: list[str] | None = None) -> int:
     prog = f"centerart {group} {name}".strip()
     try:
         # Parsing inside the try: configs check their values in __post_init__ and raise CenterArtError there.
-        cfg = tyro.cli(_resolve(cmd.config), args=argv, prog=prog, description=cmd.help)
+        default = _resolve(cmd.default)(argv) if cmd.default else None
+        cfg = tyro.cli(_resolve(cmd.config), args=argv, prog=prog, description=cmd.help, default=default)
         _resolve(cmd.run)(cfg)
     except CenterArtError as err:
         print(f"centerart: error: {err}", file=sys.stderr)

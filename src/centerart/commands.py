@@ -166,6 +166,16 @@ def _rate(x) -> str:
     return "  -  " if x is None else f"{x:.3f}"
 
 
+def recipe(cfg) -> None:
+    from centerart.recipe.runner import format_seconds, run_recipe
+
+    records = run_recipe(cfg)
+    if records:  # global rank 0
+        total = sum(r.get("seconds", 0.0) for r in records.values())
+        print(f"steps done: {', '.join(n for n, r in records.items() if r['status'] == 'done')}")
+        print(f"time over all calls: {format_seconds(total)}; wrote {Path(cfg.out) / 'manifest.json'}")
+
+
 def view(cfg) -> None:
     from centerart.viz.viewer import block_until_interrupted, serve_viewer, viewer_url
 

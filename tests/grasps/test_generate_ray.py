@@ -15,16 +15,6 @@ from centerart.grasps.labels import load_object_labels
 TIMING_KEYS = {"seconds", "sim_seconds", "cpu_seconds"}
 
 
-@pytest.fixture
-def ray_shut_down_afterwards():
-    """Leave no Ray instance behind, even when the run under test fails half-way."""
-    import ray  # the `cluster` extra; scripts/setup.sh --dev installs it
-
-    yield
-    if ray.is_initialized():
-        ray.shutdown()
-
-
 def _config(objects: Path, out: Path, **kw) -> GenerateGraspsConfig:
     return GenerateGraspsConfig(objects=objects, out=out, states=2, per_state=4, max_trials=30, **kw)
 

@@ -52,6 +52,9 @@ class GenerateObjectsConfig:
     """Parallel worker processes (default: all cores)."""
     skip_checks: bool = False
     """Write objects without the physics checks (faster; not for training data)."""
+    ray_address: str | None = None
+    """Run on a Ray cluster at this address instead of a local process pool; ``local`` starts a Ray instance on
+    this machine with ``workers`` CPUs."""
 
     def __post_init__(self):
         at_least("--count", self.count, 0)
@@ -143,7 +146,8 @@ def generate_objects(cfg: GenerateObjectsConfig) -> dict:
     out = output_folder(cfg.out)
     version = code_version()
     jobs = [(c, i, cfg.seed, str(out), cfg.skip_checks, version) for c in categories for i in range(cfg.count)]
-    records = sorted(parallel_map(_generate_one, jobs, cfg.workers, desc="objects"), key=lambda r: r["id"])
+    results = parallel_map(_generate_one, jobs, cfg.workers, desc="objects", ray_address=cfg.ray_address)
+    records = sorted(results, key=lambda r: r["id"])
     written = merge_manifest(
         out, "objects", cfg, "objects", records, key=lambda r: r["id"], summarize=_counts,
         present=lambda r: (out / r["id"] / "meta.json").is_file(), seed=cfg.seed,

@@ -43,8 +43,12 @@ def checkpoint_training_objects(path: Path, kind: str) -> TrainingObjects:
     ids = list(blob["object_ids"] if kind == "decoder" else (blob.get("decoder") or {}).get("object_ids", []))
     recorded = dict(blob.get("training_objects") or {}) or _shipped(path)
     fingerprints = {fp: oid.split("@")[0] for oid, fp in recorded.items() if fp}
-    known = set(fingerprints.values())
-    ids_only = {oid.split("@")[0] for oid, fp in recorded.items() if not fp} | {i for i in ids if i not in known}
+    ids_only = {oid.split("@")[0] for oid, fp in recorded.items() if not fp}
+    if not recorded:
+        # No record of the training objects: every id the checkpoint knows may have been trained on. (With a
+        # record, an encoder's other decoder ids are objects whose scenes it never saw; the decoder's own
+        # checkpoint vouches for them by fingerprint.)
+        ids_only |= set(ids)
     return TrainingObjects(path, fingerprints, ids_only)
 
 

@@ -52,6 +52,9 @@ from centerart.utils.seeding import item_rng
 MAX_LAYOUT_ATTEMPTS = 10
 DEPTH_SCALE_MM = 1000.0
 HEATMAP_SCALE = 65535.0
+#: zlib level of every PNG a scene writes: level 1 encodes 3x faster than PIL's default 6 for files about 20% larger
+#: (measured on 640x480 views: 0.07 vs 0.20 CPU-s per view); PNG encoding was a sixth of the stereo pipeline's time.
+PNG_COMPRESS_LEVEL = 1
 DEFAULT_RADIUS_M = {"single": (1.0, 2.5), "kitchen": (1.5, 3.0)}
 
 
@@ -169,7 +172,7 @@ def scene_id(index: int) -> str:
 
 
 def _write_png(path: Path, array: np.ndarray) -> None:
-    Image.fromarray(array).save(path)
+    Image.fromarray(array).save(path, compress_level=PNG_COMPRESS_LEVEL)
 
 
 def depth_to_png(depth: np.ndarray) -> np.ndarray:

@@ -125,5 +125,5 @@ def make_texture(kind: str, color: tuple[float, ...], seed: int, size: int = 256
 def write_texture(path: Path, image: np.ndarray) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(image).save(path)
+    Image.fromarray(image).save(path, compress_level=1)  # fast zlib level, as the scene images (dataset.py)
     return path

@@ -59,6 +59,9 @@ class GenerateSdfConfig:
     """Parallel worker processes (default: all cores)."""
     seed: int = 0
     """Global seed: item (object, state) depends only on (seed, object_id, state_index)."""
+    ray_address: str | None = None
+    """Run on a Ray cluster at this address instead of a local process pool; ``local`` starts a Ray instance on
+    this machine with ``workers`` CPUs."""
     sampling: SamplingConfig = field(default_factory=SamplingConfig)
     """Point mix and sign methods."""
 
@@ -235,7 +238,9 @@ def generate_sdf(cfg: GenerateSdfConfig, progress: bool = True) -> dict:
     out = output_folder(cfg.out)
     for oid in {it.object_id for it in items}:
         remove_stale_temporaries(out / oid)
-    rows = parallel_map(_generate_one, items, cfg.workers, desc="sdf states", disable_progress=not progress)
+    rows = parallel_map(
+        _generate_one, items, cfg.workers, "sdf states", ray_address=cfg.ray_address, disable_progress=not progress
+    )
     rows = [{k: v for k, v in r.items() if k != "config"} for r in rows]
     written = merge_manifest(
         out, "sdf", cfg, "states", rows, key=lambda r: (r["object_id"], r["state_index"]), summarize=_summary,

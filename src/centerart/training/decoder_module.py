@@ -114,12 +114,34 @@ class DecoderModule(L.LightningModule):
         bs = len(batch["points"])
         for k in ("sdf", "grasp", "sdf_near", "grasp_near"):
             if k in terms:
-                self.log(f"val_state/{k}", terms[k], prog_bar=k == "sdf", batch_size=bs)
+                # sync_dist: under DDP each process validates a share of the batches; the logged value is the mean
+                self.log(f"val_state/{k}", terms[k], prog_bar=k == "sdf", batch_size=bs, sync_dist=True)
 
     def on_validation_epoch_end(self):
         if not self.heldout_object_states or self.trainer.sanity_checking:
             return
-        self.log_dict({f"val_object/{k}": v for k, v in self.heldout_object_metrics().items()})
+        # Every process fits the same codes (same seed, same data): the values agree; sync_dist only averages them.
+        self.log_dict({f"val_object/{k}": v for k, v in self.heldout_object_metrics().items()}, sync_dist=True)
+
+    def heldout_state_metrics(self, loader) -> dict[str, float]:
+        """``val_state/*`` over a whole loader, in this process (no trainer): the means over points that
+        :meth:`validation_step` logs, each batch weighted by its item count as Lightning weights them."""
+        sums: dict[str, float] = {}
+        counts: dict[str, int] = {}
+        was_training = self.training
+        self.eval()
+        with torch.no_grad():
+            for batch in loader:
+                batch = {k: v.to(self.device) for k, v in batch.items()}
+                f = self._flat(batch)
+                terms = self._metrics(self.decoder(f["code"], f["joint"], f["xyz"]), f)
+                bs = len(batch["points"])
+                for k in ("sdf", "grasp", "sdf_near", "grasp_near"):
+                    if k in terms:
+                        sums[k] = sums.get(k, 0.0) + float(terms[k]) * bs
+                        counts[k] = counts.get(k, 0) + bs
+        self.train(was_training)
+        return {f"val_state/{k}": sums[k] / counts[k] for k in sums}
 
     def heldout_object_metrics(self, max_points: int = 8192) -> dict[str, float]:
         """Fit each held-out object's code on even-indexed points of its states, score the odd ones."""

@@ -8,12 +8,19 @@ Writes to ``--out``::
     OUT/metrics.json      final validation metrics
     OUT/logs/csv/...      per-step/epoch metrics (CSV) and OUT/logs/tensorboard/... (TensorBoard)
     OUT/lightning/last.ckpt   Lightning checkpoint (rerunning the same command resumes from it)
+
+Training runs on CPU, one GPU, or several devices / nodes with DDP (``--devices``, ``--num-nodes``,
+``--strategy``), the same code. Every process holds every shape code (one ``nn.Embedding``); DDP averages the
+gradients of all parameters, codes included: an object's code gets the gradient of whichever processes drew it in
+a step (zero from the others), and since each process's loss is a mean over its batch, the average is exactly the
+gradient of one process holding the combined batch. Only global rank 0 holds OUT's lock and writes the exports.
 """
 
 from __future__ import annotations
 
 import json
 import time
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
@@ -29,6 +36,7 @@ from centerart.training.resume import resume_checkpoint
 from centerart.utils.atomic import atomic_write_json
 from centerart.utils.checks import at_least, between, positive
 from centerart.utils.folders import check_output_folder, folder_lock
+from centerart.utils.parallel import launcher_rank
 
 if TYPE_CHECKING:
     from centerart.sdf.samples import StateData
@@ -64,6 +72,13 @@ class TrainDecoderConfig:
     """Validate every N epochs (held-out objects need a code fit, which costs time)."""
     val_code_fit_steps: int = 100
     accelerator: Literal["auto", "cpu", "gpu"] = "auto"
+    devices: int = 1
+    """Devices per node (GPUs, or CPU processes with ``--accelerator cpu``); more than one trains with DDP."""
+    num_nodes: int = 1
+    """Machines; more than one needs a cluster launcher (SLURM, torchrun) starting this command on each."""
+    strategy: Literal["auto", "ddp", "ddp_spawn"] = "auto"
+    """auto: Lightning's choice (DDP for several devices); ddp: one process per device, launched by Lightning or
+    the cluster; ddp_spawn: processes spawned by this one (works from any caller, e.g. a test or the recipe)."""
     threads: int = 0
     """torch CPU threads (0: torch default)."""
     resume: bool = True
@@ -79,6 +94,8 @@ class TrainDecoderConfig:
         at_least("--val-code-fit-steps", self.val_code_fit_steps, 0)
         at_least("--heldout-states-per-object", self.heldout_states_per_object, 0)
         at_least("--threads", self.threads, 0)
+        at_least("--devices", self.devices, 1)
+        at_least("--num-nodes", self.num_nodes, 1)
         for name in ("lr_decoder", "lr_codes", "sdf_weight"):
             positive(f"--{name.replace('_', '-')}", getattr(self, name))
         between("--heldout-object-fraction", self.heldout_object_fraction, 0.0, 0.9)
@@ -128,14 +145,18 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
     )  # fmt: skip
     last = resume_checkpoint(out, cfg.resume, module)
     out.mkdir(parents=True, exist_ok=True)
-    with folder_lock(out, blocking=False):
+    # Processes a launcher started besides rank 0 (strategy ddp) train into the same OUT without its lock.
+    with folder_lock(out, blocking=False) if launcher_rank() == 0 else nullcontext():
         atomic_write_json(out / "config.json", {**asdict(cfg), "decoder": dcfg.to_dict(), "loss": asdict(lcfg)})
         atomic_write_json(out / "split.json", data.split.to_dict())
         train_loader, val_loader = _loaders(cfg, data)
         trainer = _trainer(cfg, out)
         t0 = time.perf_counter()
         trainer.fit(module, train_loader, val_loader, ckpt_path=str(last) if last else None)
-        metrics = _final_metrics(cfg, trainer, module, val_loader, data, time.perf_counter() - t0)
+        seconds = time.perf_counter() - t0
+        if trainer.global_rank != 0:  # rank 0 alone validates and exports
+            return {"checkpoint": None, "metrics": {}, "split": data.split}
+        metrics = _final_metrics(cfg, trainer, module, val_loader, data, seconds)
         return _export(cfg, out, module, data, lcfg, metrics)
 
 
@@ -166,7 +187,10 @@ def _loaders(cfg: TrainDecoderConfig, data: _Data):
 
     from centerart.training.decoder_data import PointBatchDataset
 
-    gen = torch.Generator().manual_seed(cfg.seed)
+    # Several processes: Lightning shuffles with a DistributedSampler seeded by --seed, and a torch.Generator would
+    # not survive the trip to spawned processes (its state tensor fails to unpickle from shared memory there).
+    distributed = cfg.devices * cfg.num_nodes > 1
+    gen = None if distributed else torch.Generator().manual_seed(cfg.seed)
     train_loader = DataLoader(
         PointBatchDataset(data.train, data.code_index, cfg.points_per_item, cfg.min_items_per_epoch),
         batch_size=cfg.batch_items,
@@ -196,7 +220,9 @@ def _trainer(cfg: TrainDecoderConfig, out: Path):
     return L.Trainer(
         max_epochs=cfg.epochs,
         accelerator=cfg.accelerator,
-        devices=1,
+        devices=cfg.devices,
+        num_nodes=cfg.num_nodes,
+        strategy=cfg.strategy,
         logger=loggers,
         callbacks=[ckpt_cb, TQDMProgressBar(refresh_rate=10)] if cfg.progress else [ckpt_cb],
         enable_progress_bar=cfg.progress,
@@ -210,18 +236,31 @@ def _trainer(cfg: TrainDecoderConfig, out: Path):
 
 
 def _final_metrics(cfg: TrainDecoderConfig, trainer, module, val_loader, data: _Data, seconds: float) -> dict:
-    """The trainer's last metrics, validation redone with the final weights, and training time and throughput."""
+    """The trainer's last metrics, validation redone with the final weights, and training time and throughput.
+
+    The final validation runs in this process on the module directly (not through the trainer), so that it is the
+    same single-process computation after one-device and after multi-process (DDP) training."""
     metrics = {k: float(v) for k, v in trainer.callback_metrics.items()}
     if data.heldout_states:
         # Final numbers with the final weights (the last in-loop validation may be up to val_every epochs old).
-        trainer.validate(module, val_loader, verbose=False)
-        metrics.update({k: float(v) for k, v in trainer.callback_metrics.items() if k.startswith("val")})
-    elif data.heldout_objects:
+        metrics.update(module.heldout_state_metrics(val_loader))
+    if data.heldout_objects:
         metrics.update({f"val_object/{k}": v for k, v in module.heldout_object_metrics().items()})
-    points_seen = trainer.global_step * cfg.batch_items * cfg.points_per_item
+    world = cfg.devices * cfg.num_nodes
+    points_seen = _global_step(trainer, Path(cfg.out)) * cfg.batch_items * cfg.points_per_item * world
     metrics["train_seconds"] = seconds
     metrics["train_points_per_second"] = points_seen / max(seconds, 1e-9)
+    metrics["world_size"] = world
     return metrics
+
+
+def _global_step(trainer, out: Path) -> int:
+    """Optimizer steps of the run: the trainer's count, or after spawned DDP processes (whose counters do not come
+    back to this process) the count saved in ``last.ckpt``."""
+    last = out / "lightning" / "last.ckpt"
+    if trainer.global_step or not last.is_file():
+        return trainer.global_step
+    return int(torch.load(last, map_location="cpu", weights_only=False).get("global_step", 0))
 
 
 def training_object_fingerprints(data: Path, object_ids: list[str]) -> dict[str, str | None]:

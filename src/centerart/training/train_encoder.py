@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import time
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Literal
@@ -30,6 +31,7 @@ from centerart.training.resume import resume_checkpoint
 from centerart.utils.atomic import atomic_write_json
 from centerart.utils.checks import at_least, positive
 from centerart.utils.folders import check_output_folder, folder_lock
+from centerart.utils.parallel import launcher_rank
 
 
 @dataclass
@@ -164,7 +166,8 @@ def train_encoder(cfg: TrainEncoderConfig) -> dict:
     module = EncoderModule(enc_cfg, cfg.loss, cfg.lr, cfg.epochs, codes=codes)
     last = resume_checkpoint(out, cfg.resume, module)
     out.mkdir(parents=True, exist_ok=True)
-    with folder_lock(out, blocking=False):
+    # Processes a launcher started besides rank 0 (strategy ddp) train into the same OUT without its lock.
+    with folder_lock(out, blocking=False) if launcher_rank() == 0 else nullcontext():
         atomic_write_json(out / "config.json", config_dict)
         trainer = _trainer(cfg, out, val_loader is not None)
         t0 = time.perf_counter()
@@ -172,6 +175,8 @@ def train_encoder(cfg: TrainEncoderConfig) -> dict:
         seconds = time.perf_counter() - t0
         if val_loader is not None:
             trainer.validate(module, val_loader, verbose=False)  # final numbers with the final weights
+        if trainer.global_rank != 0:  # rank 0 alone exports
+            return {"checkpoint": None, "metrics": {}}
         metrics = _metrics(cfg, trainer, seconds, resumed=last is not None)
         return _export(cfg, out, module, decoder_path, codes, config_dict, metrics, train_loader.dataset.views)
 

@@ -22,6 +22,15 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 
+def launcher_rank() -> int:
+    """This process's rank when a launcher started several copies of the command (torchrun: RANK; SLURM:
+    SLURM_PROCID; MPI; Lightning's own DDP launcher: LOCAL_RANK / NODE_RANK); 0 for a process started alone."""
+    for key in ("RANK", "SLURM_PROCID", "OMPI_COMM_WORLD_RANK"):
+        if key in os.environ:
+            return int(os.environ[key])
+    return int(os.environ.get("LOCAL_RANK", 0)) or int(os.environ.get("NODE_RANK", 0))
+
+
 def default_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
 
@@ -61,18 +70,30 @@ def parallel_map(
         bar.close()
 
 
-def _ray_map(fn: Callable[[Any], Any], items: list[Any], address: str, workers: int, bar: tqdm) -> Iterator[Any]:
+def init_ray(address: str, workers: int | None = None) -> bool:
+    """Connect to the Ray cluster at ``address`` (``"local"``: start a private instance with ``workers`` CPUs) unless
+    Ray is already initialised; returns whether this call initialised it (the caller then shuts it down).
+
+    A caller that runs several :func:`parallel_map` calls (the recipe) initialises Ray once with it, so that each
+    call does not start and stop its own local instance (about 10 s each)."""
     try:
         import ray
     except ImportError as err:
         raise CenterArtError(
             "--ray-address was given but Ray is not installed; install it with `pip install centerart[cluster]`"
         ) from err
-    started_here = not ray.is_initialized()
-    if started_here:
-        # A cluster decides its own CPUs; only a private local instance takes the worker count.
-        local = {"num_cpus": workers} if address == "local" else {}
-        ray.init(address=address, ignore_reinit_error=True, include_dashboard=False, **local)
+    if ray.is_initialized():
+        return False
+    # A cluster decides its own CPUs; only a private local instance takes the worker count.
+    local = {"num_cpus": workers or default_workers()} if address == "local" else {}
+    ray.init(address=address, ignore_reinit_error=True, include_dashboard=False, **local)
+    return True
+
+
+def _ray_map(fn: Callable[[Any], Any], items: list[Any], address: str, workers: int, bar: tqdm) -> Iterator[Any]:
+    started_here = init_ray(address, workers)
+    import ray
+
     try:
         remote = ray.remote(fn)
         pending = [remote.remote(item) for item in items]
