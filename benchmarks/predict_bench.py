@@ -73,6 +73,7 @@ def main() -> None:
             "mesh_resolution": cfg.mesh_resolution,
             "icp": args.icp,
             "decoder_runtime": type(predictor.fast_decoder).__name__,
+            "batch_objects": cfg.batch_objects,
         },
         "median_seconds_by_objects_found": groups,
         "per_image": rows,

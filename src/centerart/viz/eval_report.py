@@ -25,23 +25,37 @@ def _records(out: Path, report: dict) -> list[dict]:
     return records
 
 
+METHOD_COLOURS = {"centerart": "#1f77b4", "centerart+icp": "#9467bd", "centerart+sdf": "#17becf",
+                  "baseline": "#ff7f0e", "oracle": "#2ca02c"}  # fmt: skip
+
+
 def plot_sr_by_category(report: dict, path: Path) -> Path:
+    """One panel per test set: SR per category, a bar per method (colour) and depth mode (solid: true depth,
+    hatched: realistic)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    groups = {k: g for k, g in report["groups"].items() if g["sr"] is not None}
-    cats = sorted({c for g in groups.values() for c in g["by_category"]})
-    fig, ax = plt.subplots(figsize=(max(6.0, 1.6 * len(cats) + 2), 4.0), dpi=110)
-    width = 0.8 / max(1, len(groups))
-    for i, (key, g) in enumerate(groups.items()):
-        vals = [(g["by_category"].get(c) or {}).get("sr") or 0.0 for c in cats]
-        ax.bar(np.arange(len(cats)) + i * width, vals, width, label=key)
-    ax.set_xticks(np.arange(len(cats)) + 0.4 - width / 2, cats, rotation=15)
-    ax.set_ylim(0, 1)
-    ax.set_ylabel("SR (top grasp executed)")
-    ax.legend(fontsize=6, ncol=2)
+    sets = list(report["sets"])
+    fig, axes = plt.subplots(len(sets), 1, figsize=(9.0, 2.6 * len(sets)), dpi=110, squeeze=False)
+    for ax, name in zip(axes[:, 0], sets, strict=True):
+        keys = [k for k in report["groups"] if k.split("|")[0] == name and report["groups"][k]["sr"] is not None]
+        cats = sorted({c for k in keys for c in report["groups"][k]["by_category"]})
+        width = 0.8 / max(1, len(keys))
+        for i, key in enumerate(sorted(keys, key=lambda k: (k.split("|")[1], k.split("|")[2] != "true"))):
+            _, method, depth = key.split("|")
+            by_cat = report["groups"][key]["by_category"]
+            vals = [(by_cat.get(c) or {}).get("sr") or 0.0 for c in cats]
+            style = {"color": METHOD_COLOURS.get(method, "grey"), "hatch": "//" if depth != "true" else None}
+            ax.bar(
+                np.arange(len(cats)) + i * width, vals, width, edgecolor="white", label=f"{method}, {depth}", **style
+            )
+        ax.set_xticks(np.arange(len(cats)) + 0.4 - width / 2, cats)
+        ax.set_ylim(0, 1.05)
+        ax.set_ylabel("SR")
+        ax.set_title(f"{report['sets'][name].get('label', name)} ({report['sets'][name]['layout']})", fontsize=9)
+    axes[0, 0].legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, 1.45))
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path)
@@ -49,28 +63,33 @@ def plot_sr_by_category(report: dict, path: Path) -> Path:
     return path
 
 
-def plot_nearest_label(records: list[dict], path: Path) -> Path:
+def plot_nearest_label(report: dict, records: list[dict], path: Path) -> Path:
+    """One panel per test set: the share of objects whose top grasp lies within x of a ground-truth label
+    (method = colour, solid = true depth, dashed = realistic); misses count as never within."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    by = {}
-    for rec in records:
-        for r in rec["rows"]:
-            if r["method"] != "oracle":
+    sets = list(report["sets"])
+    fig, axes = plt.subplots(1, len(sets), figsize=(3.4 * len(sets), 3.2), dpi=110, squeeze=False, sharey=True)
+    for ax, name in zip(axes[0], sets, strict=True):
+        by: dict[tuple[str, str], list[float]] = {}
+        for rec in (r for r in records if r["set"] == name):
+            for r in (r for r in rec["rows"] if r["method"] != "oracle"):
                 d = r.get("nearest_label_m")
-                by.setdefault(f"{rec['set']}|{r['method']}|{r['depth']}", []).append(np.inf if d is None else d)
-    fig, ax = plt.subplots(figsize=(6.5, 4.0), dpi=110)
-    for key, d in sorted(by.items()):
-        d = np.sort(np.asarray(d))
-        ax.step(d, np.arange(1, len(d) + 1) / len(d), where="post", label=key)
-    ax.axvline(0.03, color="k", ls="--", lw=0.8)
-    ax.set_xlim(0, 0.5)
-    ax.set_ylim(0, 1)
-    ax.set_xlabel("top grasp to nearest ground-truth label (m); dashed: RSR threshold")
-    ax.set_ylabel("share of objects")
-    ax.legend(fontsize=6)
+                by.setdefault((r["method"], r["depth"]), []).append(np.inf if d is None else d)
+        for (method, depth), d in sorted(by.items()):
+            d = np.sort(np.asarray(d))
+            ax.step(d, np.arange(1, len(d) + 1) / len(d), where="post", color=METHOD_COLOURS.get(method, "grey"),
+                    ls="-" if depth == "true" else "--", label=f"{method}, {depth}")  # fmt: skip
+        ax.axvline(0.03, color="k", ls=":", lw=0.8)
+        ax.set_xlim(0, 0.5)
+        ax.set_ylim(0, 1)
+        ax.set_title(report["sets"][name].get("label", name), fontsize=9)
+        ax.set_xlabel("top grasp to nearest label (m)")
+    axes[0, 0].set_ylabel("share of objects (dotted: RSR 3 cm)")
+    axes[0, 0].legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
@@ -123,6 +142,6 @@ def draw_eval_pictures(out: Path, report: dict) -> list[Path]:
     out = Path(out)
     records = _records(out, report)
     written = [plot_sr_by_category(report, out / "plots" / "sr_by_category.png")]
-    written.append(plot_nearest_label(records, out / "plots" / "nearest_label.png"))
+    written.append(plot_nearest_label(report, records, out / "plots" / "nearest_label.png"))
     sheet = plot_failures(out, report, records, out / "failures.png")
     return written + ([sheet] if sheet else [])
