@@ -167,3 +167,17 @@ def test_rerun_with_other_settings_into_the_same_folder_is_refused(tmp_path):
     check_same_settings(tmp_path, {**jc, "workers": 7})  # how it runs may change
     with pytest.raises(CenterArtError, match="other settings \\(refine\\)"):
         check_same_settings(tmp_path, {**jc, "refine": ["none", "icp"]})
+
+
+def test_labels_at_the_test_state_are_the_same_generated_or_cached(single_dataset, tmp_path):
+    """A resumed scene reads its labels from the cache: they must be exactly the ones a fresh run uses."""
+    from centerart.evaluation.scene_eval import state_labels
+    from centerart.scenes.description import load_scene_object
+
+    spec = SceneDescription.load(single_dataset / "scene_000000" / "scene.json").objects[0]
+    cfg = job_config(EvalScenesConfig(scenes=(single_dataset,), out=tmp_path, labels_per_state=10))
+    cache = tmp_path / "labels" / "obj0.npz"
+    fresh = state_labels(load_scene_object(spec), spec.joint_state, cache, cfg, "scene/obj0")
+    cached = state_labels(load_scene_object(spec), spec.joint_state, cache, cfg, "scene/obj0")
+    assert len(fresh) > 0
+    np.testing.assert_array_equal(fresh, cached)

@@ -20,12 +20,14 @@ from centerart.scenes.description import SceneDescription, load_scene_object
 
 @dataclass
 class PhysicsScene:
-    """One pybullet world of a scene. ``targets[k]`` / ``objects[k]``: scene object k (instance k + 1)."""
+    """One pybullet world of a scene. ``targets[k]`` / ``objects[k]`` / ``states[k]``: scene object k (instance
+    k + 1) and its true target-joint state (metric; what the saved world holds, exactly)."""
 
     client: int
     executor: GraspExecutor
     targets: list[GraspTarget]
     objects: list[ArticulatedObject]
+    states: list[float]
     boxes: list[int] = field(default_factory=list)
 
     def close(self) -> None:
@@ -66,4 +68,4 @@ def build_physics_scene(scene: SceneDescription, objects: list[ArticulatedObject
 
         pb.disconnect(client)
         raise
-    return PhysicsScene(client, executor, targets, list(objects), boxes)
+    return PhysicsScene(client, executor, targets, list(objects), [s.joint_state for s in scene.objects], boxes)

@@ -114,12 +114,12 @@ def predictor_for(cfg: dict, refine: str):
     from centerart.inference.predictor import Predictor, PredictorConfig
     from centerart.inference.refinement import RefineConfig, SdfRefineConfig
 
-    key = (cfg["encoder"], cfg["decoder"], refine, cfg.get("shape_prior"))
+    key = (cfg["encoder"], cfg["decoder"], refine, cfg["shape_prior"])
     if key not in _PREDICTORS:
         config = PredictorConfig(
             refine=RefineConfig(icp=refine == "icp"),
             refine_sdf=SdfRefineConfig(enabled=refine == "sdf"),
-            shape_prior=cfg.get("shape_prior", "regressed"),
+            shape_prior=cfg["shape_prior"],
         )
         _PREDICTORS[key] = Predictor(cfg["encoder"], cfg["decoder"], config=config)
     return _PREDICTORS[key]
@@ -128,23 +128,27 @@ def predictor_for(cfg: dict, refine: str):
 # ---------------------------------------------------------------------------- labels at the test state
 def state_labels(obj, q: float, cache: Path, cfg: dict, seed_key: str) -> np.ndarray:
     """(L, 4, 4) ground-truth TCP labels (object frame) of ``obj`` at state ``q``, generated once and cached."""
+    from centerart.grasps.labels import StateLabels
+
+    if not cache.is_file():
+        _generate_state_labels(obj, q, cache, cfg, seed_key)
+    # Read back also right after generating: the file holds float32, and a resumed run must use exactly what an
+    # uninterrupted one did.
+    return StateLabels.load(cache).poses
+
+
+def _generate_state_labels(obj, q: float, cache: Path, cfg: dict, seed_key: str) -> None:
     from centerart.grasps.generate import GenerateGraspsConfig, label_joint_state
-    from centerart.utils.atomic import atomic_write_bytes
+    from centerart.grasps.labels import LABEL_SHAPES
+    from centerart.utils.npz_records import save_record
     from centerart.utils.seeding import item_rng
 
-    if cache.is_file():
-        return np.load(cache)["poses"]
     gcfg = GenerateGraspsConfig(
         objects=Path(obj.path), out=cache.parent, per_state=cfg["labels_per_state"],
         max_trials=cfg["label_max_trials"], max_candidates=8 * cfg["label_max_trials"], keep_failures=0,
     )  # fmt: skip
     labels, _ = label_joint_state(obj, q, item_rng(cfg["seed"], seed_key), gcfg)
-    import io
-
-    buf = io.BytesIO()
-    np.savez_compressed(buf, poses=labels.poses.astype(np.float32), q=np.float64(q))
-    atomic_write_bytes(cache, buf.getvalue())
-    return labels.poses
+    save_record(cache, labels, compressed=True, shapes=LABEL_SHAPES)
 
 
 def scene_context(scene_dir: Path, labels_dir: Path, cfg: dict):
@@ -161,7 +165,7 @@ def scene_context(scene_dir: Path, labels_dir: Path, cfg: dict):
         poses = state_labels(obj, spec.joint_state, cache, cfg, f"{scene.scene_id}/{spec.name}")
         labels_world.append(scene.object_pose(k) @ poses if len(poses) else np.zeros((0, 4, 4)))
     phys = build_physics_scene(scene, objects)
-    return scene, SceneContext(phys, objects, [s.joint_state for s in scene.objects], labels_world)
+    return scene, SceneContext(phys, labels_world)
 
 
 def view_inputs(scene_dir: Path, depth_modes) -> list:

@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from centerart.assets.articulated_object import ArticulatedObject
 from centerart.evaluation.baseline import baseline_grasps
 from centerart.evaluation.metrics import nearest_label_position_m, relaxed_success, shape_metrics
 from centerart.evaluation.physics_scene import PhysicsScene
@@ -21,7 +20,7 @@ from centerart.geometry.camera import backproject_depth
 from centerart.geometry.matching import match_points
 from centerart.grasps.executor import commanded_direction
 from centerart.models.encoder.readout import Detection
-from centerart.training.encoder_metrics import MATCH_DISTANCE_M, MIN_VISIBLE_FRACTION, object_errors
+from centerart.training.encoder_metrics import MATCH_DISTANCE_M, MIN_VISIBLE_FRACTION, object_errors, view_metrics
 
 
 @dataclass
@@ -29,8 +28,6 @@ class SceneContext:
     """One scene in physics, with its objects' ground-truth labels at their exact states (world frame)."""
 
     phys: PhysicsScene
-    objects: list[ArticulatedObject]
-    states: list[float]
     labels_world: list[np.ndarray]
     oracle: dict[int, dict] = field(default_factory=dict)
 
@@ -120,7 +117,7 @@ def match_predictions(v: ViewInput, preds) -> dict[int, int]:
 
 
 def true_mesh_camera(ctx: SceneContext, v: ViewInput, k: int, obj: dict):
-    mesh = ctx.objects[k].mesh(ctx.states[k]).copy()
+    mesh = ctx.phys.objects[k].mesh(ctx.phys.states[k]).copy()
     mesh.apply_transform(np.asarray(obj["camera_T_object"], float))
     return mesh
 
@@ -147,8 +144,6 @@ def gt_pose_swap(predictor, v: ViewInput, pred, obj: dict) -> np.ndarray:
 
 def learned_rows(ctx: SceneContext, v: ViewInput, predictor, method: str, shape: bool, ablation: bool):
     """Rows of the learned method, plus the image's detection counts and latency."""
-    from centerart.training.encoder_metrics import view_metrics
-
     preds = predictor.predict(v.rgb, v.depth, v.K)
     image = {"scene": v.scene, "view": v.view, "depth": v.depth_mode, "method": method}
     image.update(counts=view_metrics(preds, v.labels)["counts"], timing_s=dict(predictor.timing))

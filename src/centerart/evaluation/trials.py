@@ -37,14 +37,7 @@ def thresholds() -> dict:
 
 def _direction(phys: PhysicsScene, k: int) -> int:
     target = phys.targets[k]
-    return commanded_direction(target.joint_type, _q(phys, k), target.upper)
-
-
-def _q(phys: PhysicsScene, k: int) -> float:
-    import pybullet as pb
-
-    pb.restoreState(phys.executor.state_id, physicsClientId=phys.client)
-    return phys.targets[k].joint_state()
+    return commanded_direction(target.joint_type, phys.states[k], target.upper)
 
 
 def _as_dict(result: GraspResult) -> dict:
@@ -79,7 +72,7 @@ def full_open(phys: PhysicsScene, k: int, world_T_tcp: np.ndarray, axis: dict) -
     target = phys.targets[k]
     if _direction(phys, k) < 0:
         return None
-    q0, lo, hi = _q(phys, k), target.lower, target.upper
+    q0, lo, hi = phys.states[k], target.lower, target.upper
     goal = lo + FULL_OPEN_FRACTION * (hi - lo)
     pull = goal - q0 if axis["type"] == target.joint_type else FULL_TRAVEL_BY_TYPE[axis["type"]]
     moved = target.with_axis(axis["origin"], axis["direction"], axis["type"])

@@ -35,6 +35,9 @@ from centerart.errors import CenterArtError
 from centerart.utils.npz_records import load_record, save_record
 from centerart.utils.npz_records import state_file as state_path
 
+#: How the pose arrays of a label file are stored (an empty array keeps its (0, 4, 4) shape).
+LABEL_SHAPES = {"poses": (-1, 4, 4), "failed_poses": (-1, 4, 4)}
+
 
 @dataclass
 class StateLabels:
@@ -63,7 +66,7 @@ class StateLabels:
             state_path(folder, self.object_id, self.state_index),
             self,
             compressed=True,
-            shapes={"poses": (-1, 4, 4), "failed_poses": (-1, 4, 4)},
+            shapes=LABEL_SHAPES,
         )
 
     @classmethod

@@ -126,13 +126,13 @@ class Predictor:
         """The decoder that grasp extraction and meshing call (see ``PredictorConfig.runtime``)."""
         from centerart.models.decoder_onnx import OnnxDecoder, onnxruntime_available
 
-        on_cpu = self.device.type == "cpu"
-        if runtime == "onnxruntime" and not (on_cpu and onnxruntime_available()):
+        on_cpu, available = self.device.type == "cpu", onnxruntime_available()
+        if runtime == "onnxruntime" and not (on_cpu and available):
             raise CenterArtError(
                 "runtime onnxruntime: needs device cpu and the onnx and onnxruntime packages "
-                f"(device {self.device}, packages {'found' if onnxruntime_available() else 'missing'})"
+                f"(device {self.device}, packages {'found' if available else 'missing'})"
             )
-        if runtime == "onnxruntime" or (runtime == "auto" and on_cpu and onnxruntime_available()):
+        if runtime == "onnxruntime" or (runtime == "auto" and on_cpu and available):
             return OnnxDecoder(self.decoder.decoder)
         return self.decoder.decoder
 
@@ -144,28 +144,32 @@ class Predictor:
         """Objects in one RGB (H, W, 3) uint8 image with depth (H, W) in metres (holes 0 / NaN) and 3x3 ``K``."""
         from centerart.models.encoder.detect import detect_objects
 
-        h, w = np.asarray(depth).shape[:2]
-        camera = K if isinstance(K, Intrinsics) else Intrinsics.from_matrix(K, w, h)
-        depth = check_inputs(np.asarray(rgb), np.asarray(depth), camera)
+        camera, depth = self._checked(rgb, depth, K)
         t0 = time.perf_counter()
         encoded = detect_objects(self.encoder.encoder, rgb, depth, camera, self.config.peak_threshold)
         self.timing = {"encoder_s": time.perf_counter() - t0, "grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
         self.last_heatmap = encoded.heatmap
-        # One search tree of the observed points for every object's grasp collision check.
-        scene = cKDTree(backproject_depth(depth, camera.K)) if self.config.collision.enabled else None
-        preds = self._predict_objects(encoded.detections, depth, camera, scene)
+        preds = self._predict_objects(encoded.detections, depth, camera, self._scene_tree(depth, camera))
         self.timing["total_s"] = time.perf_counter() - t0
         return preds
 
     def predict_detection(self, det: Detection, rgb: np.ndarray, depth: np.ndarray, K) -> ObjectPrediction:
         """Decode, refine, filter and rank grasps for one given detection (e.g. one with ground-truth pose and
         joint state swapped in, to measure what each stage loses); same inputs and frames as :meth:`predict`."""
+        camera, depth = self._checked(rgb, depth, K)
+        self.timing = {"grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
+        return self._predict_objects([det], depth, camera, self._scene_tree(depth, camera))[0]
+
+    @staticmethod
+    def _checked(rgb: np.ndarray, depth: np.ndarray, K) -> tuple[Intrinsics, np.ndarray]:
+        """The intrinsics of the image and its checked depth (holes as 0; errors name the input)."""
         h, w = np.asarray(depth).shape[:2]
         camera = K if isinstance(K, Intrinsics) else Intrinsics.from_matrix(K, w, h)
-        depth = check_inputs(np.asarray(rgb), np.asarray(depth), camera)
-        self.timing = {"grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
-        scene = cKDTree(backproject_depth(depth, camera.K)) if self.config.collision.enabled else None
-        return self._predict_objects([det], depth, camera, scene)[0]
+        return camera, check_inputs(np.asarray(rgb), np.asarray(depth), camera)
+
+    def _scene_tree(self, depth: np.ndarray, camera: Intrinsics) -> cKDTree | None:
+        """One search tree of the observed points for every object's grasp collision check (None: filter off)."""
+        return cKDTree(backproject_depth(depth, camera.K)) if self.config.collision.enabled else None
 
     def _tick(self, key: str, since: float) -> float:
         now = time.perf_counter()

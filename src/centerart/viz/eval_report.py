@@ -17,12 +17,14 @@ MAX_FAILURES = 12
 THUMB_WIDTH = 400
 
 
-def _records(out: Path, report: dict) -> list[dict]:
-    records = []
-    for name in report["sets"]:
-        folder = Path(out) / "records" / name
-        records += [json.loads(p.read_text()) for p in sorted(folder.glob("*.json"))] if folder.is_dir() else []
-    return records
+def _records(out: Path) -> list[dict]:
+    """The records the report was made from: the scenes ``testset.json`` selected (an earlier, larger run into the
+    same folder may have left more)."""
+    from centerart.evaluation.scene_report import load_records
+
+    testset = json.loads((Path(out) / "testset.json").read_text())
+    sets = {n: [Path(s["folder"]) / scene for scene in s["scenes"]] for n, s in testset["sets"].items()}
+    return load_records(out, sets)[0]
 
 
 METHOD_COLOURS = {"centerart": "#1f77b4", "centerart+icp": "#9467bd", "centerart+sdf": "#17becf",
@@ -140,7 +142,7 @@ def plot_failures(out: Path, report: dict, records: list[dict], path: Path) -> P
 def draw_eval_pictures(out: Path, report: dict) -> list[Path]:
     """Write ``plots/sr_by_category.png``, ``plots/nearest_label.png`` and ``failures.png`` under ``out``."""
     out = Path(out)
-    records = _records(out, report)
+    records = _records(out)
     written = [plot_sr_by_category(report, out / "plots" / "sr_by_category.png")]
     written.append(plot_nearest_label(report, records, out / "plots" / "nearest_label.png"))
     sheet = plot_failures(out, report, records, out / "failures.png")
