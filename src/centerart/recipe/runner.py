@@ -25,6 +25,7 @@ from typing import Any
 from centerart.errors import CenterArtError
 from centerart.recipe.config import STEPS, RecipeConfig
 from centerart.recipe.steps import STEP_TABLE, Paths, step_folders
+from centerart.utils.folders import output_folder
 from centerart.utils.manifest import code_version, write_manifest
 from centerart.utils.parallel import init_ray, launcher_rank
 
@@ -38,8 +39,7 @@ FOLLOW_POLL_S = 5.0
 def run_recipe(cfg: RecipeConfig, echo=print) -> dict:
     """Run (or resume) the recipe up to ``cfg.until``; returns the manifest's step records."""
     check_config(cfg)
-    out = Path(cfg.out).resolve()
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(Path(cfg.out).resolve())  # --out naming a file is one clear error, before anything is made
     paths = Paths(out)
     if launcher_rank() != 0:
         follow(cfg, paths, echo)
@@ -100,6 +100,8 @@ def check_config(cfg: RecipeConfig) -> None:
         )
     if cfg.objects.count < 1:
         raise CenterArtError(f"--objects.count must be >= 1, got {cfg.objects.count}")
+    if cfg.workers is not None and cfg.workers < 1:  # checked here, not by the first step's config: before --out
+        raise CenterArtError(f"--workers must be >= 1, got {cfg.workers}")
     if cfg.devices < 1 or cfg.num_nodes < 1:
         raise CenterArtError("--devices and --num-nodes must be >= 1")
     world = cfg.devices * cfg.num_nodes
