@@ -141,10 +141,11 @@ def eval_decoder(cfg) -> None:
     import json
 
     from centerart.evaluation.decoder_eval import evaluate_decoder
+    from centerart.viz.decoder_eval_plots import draw_decoder_eval
 
     report = evaluate_decoder(cfg)
     print(json.dumps(report["summary"], indent=1))
-    print(f"wrote {Path(cfg.out) / 'report.json'}")
+    print(f"wrote {Path(cfg.out) / 'report.json'} and {draw_decoder_eval(report, Path(cfg.out))}")
 
 
 def eval_scenes(cfg) -> None:

@@ -45,7 +45,7 @@ def test_eval_decoder_cli_writes_a_complete_report(tmp_path):
             "20",
         ]
     )
-    assert code == 0
+    assert code == 0 and (out / "report.png").stat().st_size > 10_000
     report = json.loads((out / "report.json").read_text())
     row = report["summary"]["train"]
     assert row["states"] >= 1
@@ -53,3 +53,10 @@ def test_eval_decoder_cli_writes_a_complete_report(tmp_path):
     assert 0.0 <= row["fscore"] <= 1.0
     for key in ("precision_at_k", "coverage", "physics_top1", "physics_any5"):
         assert 0.0 <= row[key] <= 1.0, key
+    # state kinds partition the group; calibration pools exactly the executed grasps with their scores
+    kinds = row["by_state_kind"]
+    assert set(kinds) <= {"closed", "interior", "open"} and sum(k["states"] for k in kinds.values()) == row["states"]
+    executed = [s for s in report["states"] if s["group"] == "train"]
+    assert row["calibration"]["count"] == sum(len(s["grasp_scores"]) for s in executed)
+    assert all(len(s["grasp_scores"]) == len(s["grasp_successes"]) <= 5 for s in executed)
+    assert report["summary"]["calibration_all_groups"]["count"] >= row["calibration"]["count"]

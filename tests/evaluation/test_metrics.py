@@ -89,3 +89,21 @@ def test_nearest_label_distribution():
     assert dist["within_match_m"]["share"] == 0.25 and dist["within_relaxed_m"]["share"] == 0.5
     assert np.isinf(m.nearest_label_position_m(grasps, np.zeros((0, 4, 4)))).all()
     assert m.thresholds()["relaxed_angle_deg"] == 45.0
+
+
+def test_score_calibration_on_known_cases():
+    scores = np.array([0.1, 0.15, 0.9, 0.95])
+    ranked = m.score_calibration(scores, np.array([False, False, True, True]))
+    assert ranked["auroc"] == 1.0 and ranked["success_rate"] == 0.5
+    # bins [0, 0.2): mean 0.125, none succeed; [0.8, 1]: mean 0.925, all succeed -> ECE = 0.5*0.125 + 0.5*0.075
+    assert ranked["ece"] == pytest.approx(0.1)
+    assert ranked["brier"] == pytest.approx(np.mean([0.01, 0.0225, 0.01, 0.0025]))
+    assert [b["count"] for b in ranked["bins"]] == [2, 0, 0, 0, 2]
+    reversed_ = m.score_calibration(scores, np.array([True, True, False, False]))
+    assert reversed_["auroc"] == 0.0 and reversed_["ece"] == pytest.approx(0.9)
+    ties = m.score_calibration(np.full(4, 0.5), np.array([True, False, True, False]))
+    assert ties["auroc"] == 0.5 and ties["bins"][2]["success_rate"] == 0.5
+    assert m.score_calibration(scores, np.ones(4, bool))["auroc"] is None  # one class: no ranking to judge
+    assert m.score_calibration(np.zeros(0), np.zeros(0, bool))["ece"] is None
+    with pytest.raises(ValueError, match="outcomes"):
+        m.score_calibration(scores, np.ones(3, bool))

@@ -18,7 +18,10 @@ Per (object, state), in the object's canonical frame:
 - physics (with --physics, default on): the top-1 and the top-5 predictions executed one by one with the
   grasp-label simulator (``grasps/executor.py``: same gripper, forces and success rule as the labels; no
   denominator trimming: a missing prediction counts as a failure). top-1 success = the first grasp succeeds;
-  top-5 success = mean over the 5 slots (missing slots fail); any-of-5 = at least one succeeds.
+  top-5 success = mean over the 5 slots (missing slots fail); any-of-5 = at least one succeeds. The same rows per
+  state kind (``closed`` = lower joint limit, ``open`` = upper limit, ``interior``), and the calibration of the
+  grasps' confidence scores against their physics outcomes (``metrics.score_calibration``: reliability table,
+  expected calibration error, Brier score, ROC AUC), per group and over all executed grasps.
 """
 
 from __future__ import annotations
@@ -32,14 +35,16 @@ from tqdm import tqdm
 
 from centerart.errors import CenterArtError
 from centerart.evaluation.metrics import (
+    CALIBRATION_BINS,
+    GRASP_MATCH_ANGLE_DEG,
+    grasp_matches,
+    score_calibration,
+)
+from centerart.evaluation.metrics import (
     CHAMFER_SAMPLES as SURFACE_SAMPLES,
 )
 from centerart.evaluation.metrics import (
     FSCORE_THRESHOLD_M as FSCORE_THRESHOLD,
-)
-from centerart.evaluation.metrics import (
-    GRASP_MATCH_ANGLE_DEG,
-    grasp_matches,
 )
 from centerart.evaluation.metrics import (
     GRASP_MATCH_POSITION_M as GRASP_MATCH_DISTANCE,
@@ -47,6 +52,7 @@ from centerart.evaluation.metrics import (
 from centerart.utils.checks import at_least
 
 GROUPS = ("train", "heldout_state", "heldout_object")
+STATE_KINDS = ("closed", "interior", "open")
 
 
 @dataclass
@@ -108,7 +114,16 @@ class StateResult:
     physics_top1: float | None = None
     physics_top5: float | None = None
     physics_any5: float | None = None
+    grasp_scores: list[float] = field(default_factory=list)
+    """Confidence of each executed grasp (the top 5, best first)."""
+    grasp_successes: list[bool] = field(default_factory=list)
+    """Physics outcome of each executed grasp, aligned with ``grasp_scores``."""
     extra: dict = field(default_factory=dict)
+
+    @property
+    def state_kind(self) -> str:
+        """``closed`` (normalized joint 0: the lower limit), ``open`` (1: the upper limit) or ``interior``."""
+        return "closed" if self.joint <= 1e-6 else "open" if self.joint >= 1.0 - 1e-6 else "interior"
 
 
 def _select(indices: list[int], k: int) -> list[int]:
@@ -135,8 +150,8 @@ def _physics(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
 
 
 def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
-    """Evaluate a checkpoint per group (see the module doc); writes ``report.json`` and ``report.png`` to
-    ``cfg.out`` and returns the report."""
+    """Evaluate a checkpoint per group (see the module doc); writes ``report.json`` to ``cfg.out`` and returns
+    the report (``viz.decoder_eval_plots`` draws it)."""
     from centerart.inference.decoder_grasps import GraspExtractionConfig
     from centerart.inference.reconstruction import MeshConfig
     from centerart.models.checkpoint import load_decoder
@@ -166,7 +181,6 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
     out = Path(cfg.out)
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_json(out / "report.json", report)
-    _plots(results, out)
     return report
 
 
@@ -223,7 +237,8 @@ def _evaluate_state(loaded, code, obj_folder: Path, st, group: str, cfg, mesh_cf
         _label_metrics(r, grasps.poses, cfg)
     if cfg.physics:
         ok = _physics(obj, q, grasps.poses, 5)
-        ok += [False] * (5 - len(ok))
+        r.grasp_scores, r.grasp_successes = [float(x) for x in grasps.scores[: len(ok)]], ok
+        ok = ok + [False] * (5 - len(ok))
         r.physics_top1, r.physics_top5, r.physics_any5 = float(ok[0]), float(np.mean(ok)), float(any(ok))
     return r
 
@@ -245,35 +260,50 @@ def _label_metrics(r: StateResult, poses: np.ndarray, cfg: EvalDecoderConfig) ->
 
 
 def _summary(results: list[StateResult]) -> dict:
-    """Per group: counts, and the mean (and the Chamfer median) of every metric over its states."""
+    """Per group: counts, the mean (and the Chamfer median) of every metric over its states, the same per state
+    kind, and the calibration of the executed grasps' scores; ``all`` pools the groups' calibration."""
     summary = {}
     for g in GROUPS:
         rs = [r for r in results if r.group == g]
         if not rs:
             continue
-        row = {
-            "states": len(rs),
-            "objects": len({r.object_id for r in rs}),
-            # no zero crossing predicted: Chamfer is undefined (left out of its mean), F-score counts as 0
-            "empty_meshes": sum(not np.isfinite(r.chamfer_mm) for r in rs),
-        }
-        for key in (
-            "chamfer_mm",
-            "fscore",
-            "precision_at_k",
-            "coverage",
-            "physics_top1",
-            "physics_top5",
-            "physics_any5",
-            "seconds_mesh_grasps",
-        ):
-            vals = [getattr(r, key) for r in rs if getattr(r, key) is not None and np.isfinite(getattr(r, key))]
-            if vals:
-                row[key] = float(np.mean(vals))
-                if key == "chamfer_mm":
-                    row["chamfer_mm_median"] = float(np.median(vals))
+        row = _metric_row(rs)
+        row["by_state_kind"] = {k: _metric_row(ks) for k in STATE_KINDS if (ks := [r for r in rs if r.state_kind == k])}
+        row["calibration"] = _calibration(rs)
         summary[g] = row
+    if results:
+        summary["calibration_all_groups"] = _calibration(results)
     return summary
+
+
+def _metric_row(rs: list[StateResult]) -> dict:
+    row = {
+        "states": len(rs),
+        "objects": len({r.object_id for r in rs}),
+        # no zero crossing predicted: Chamfer is undefined (left out of its mean), F-score counts as 0
+        "empty_meshes": sum(not np.isfinite(r.chamfer_mm) for r in rs),
+    }
+    for key in (
+        "chamfer_mm",
+        "fscore",
+        "precision_at_k",
+        "coverage",
+        "physics_top1",
+        "physics_top5",
+        "physics_any5",
+        "seconds_mesh_grasps",
+    ):
+        vals = [getattr(r, key) for r in rs if getattr(r, key) is not None and np.isfinite(getattr(r, key))]
+        if vals:
+            row[key] = float(np.mean(vals))
+            if key == "chamfer_mm":
+                row["chamfer_mm_median"] = float(np.median(vals))
+    return row
+
+
+def _calibration(rs: list[StateResult]) -> dict:
+    scores = [x for r in rs for x in r.grasp_scores]
+    return score_calibration(np.asarray(scores, float), np.asarray([x for r in rs for x in r.grasp_successes], bool))
 
 
 def _report(cfg: EvalDecoderConfig, loaded, results: list[StateResult]) -> dict:
@@ -288,38 +318,9 @@ def _report(cfg: EvalDecoderConfig, loaded, results: list[StateResult]) -> dict:
             "grasp_match_distance_m": GRASP_MATCH_DISTANCE,
             "grasp_match_angle_deg": GRASP_MATCH_ANGLE_DEG,
             "top_k": cfg.top_k,
+            "calibration_bins": CALIBRATION_BINS,
         },
         "summary": _summary(results),
         "states": [asdict(r) for r in results],
         "code_version": code_version(),
     }
-
-
-def _plots(results: list[StateResult], out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    groups = [g for g in GROUPS if any(r.group == g for r in results)]
-    if not groups:
-        return
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), dpi=100)
-    data = [[r.chamfer_mm for r in results if r.group == g and np.isfinite(r.chamfer_mm)] for g in groups]
-    axes[0].boxplot(data, tick_labels=groups)
-    axes[0].set_ylabel("Chamfer-L1 (mm)")
-    axes[1].bar(groups, [np.mean([r.fscore for r in results if r.group == g]) for g in groups])
-    axes[1].set_ylabel(f"F-score@{FSCORE_THRESHOLD * 100:.0f}cm")
-    for i, key in enumerate(("precision_at_k", "coverage", "physics_top1")):
-        vals = [
-            np.mean([getattr(r, key) for r in results if r.group == g and getattr(r, key) is not None] or [np.nan])
-            for g in groups
-        ]
-        axes[2].bar(np.arange(len(groups)) + (i - 1) * 0.27, vals, width=0.27, label=key)
-    axes[2].set_xticks(np.arange(len(groups)), groups)
-    axes[2].set_ylim(0, 1)
-    axes[2].legend(fontsize=8)
-    axes[2].set_title("grasps")
-    fig.tight_layout()
-    fig.savefig(out / "report.png")
-    plt.close(fig)

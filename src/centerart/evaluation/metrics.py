@@ -28,6 +28,8 @@ GRASP_MATCH_ANGLE_DEG = 30.0
 #: Relaxed success (RSR): the top grasp lies within this distance (m) and rotation (deg) of some label.
 RELAXED_POSITION_M = 0.03
 RELAXED_ANGLE_DEG = 45.0
+#: Equal-width confidence bins on [0, 1] of the grasp-score calibration table.
+CALIBRATION_BINS = 5
 
 
 @dataclass
@@ -204,6 +206,43 @@ def distance_distribution(distances_m: np.ndarray, quantiles=(0.1, 0.25, 0.5, 0.
     return out
 
 
+def score_calibration(scores: np.ndarray, outcomes: np.ndarray, bins: int = CALIBRATION_BINS) -> dict:
+    """How well grasp confidences in [0, 1] predict physics success (True/False per executed grasp).
+
+    Returns the count, the success rate, a reliability table (equal-width bins: count, mean score, success
+    rate), the expected calibration error (count-weighted mean |success rate - mean score| over bins), the Brier
+    score and the ROC AUC (probability that a random success outranks a random failure, ties counted half;
+    ``None`` when only one outcome occurs). A useful ranking has AUC > 0.5 whatever its calibration."""
+    s = np.clip(np.asarray(scores, float), 0.0, 1.0)
+    y = np.asarray(outcomes, bool)
+    if s.shape != y.shape:
+        raise ValueError(f"score_calibration: {s.shape} scores but {y.shape} outcomes")
+    out: dict = {"count": len(s), "success_rate": float(y.mean()) if len(y) else None, "bins": []}
+    if not len(s):
+        return out | {"ece": None, "brier": None, "auroc": None}
+    which = np.minimum((s * bins).astype(int), bins - 1)
+    ece = 0.0
+    for b in range(bins):
+        m = which == b
+        row = {"range": [b / bins, (b + 1) / bins], "count": int(m.sum()), "mean_score": None, "success_rate": None}
+        if m.any():
+            row["mean_score"], row["success_rate"] = float(s[m].mean()), float(y[m].mean())
+            ece += m.sum() / len(s) * abs(row["success_rate"] - row["mean_score"])
+        out["bins"].append(row)
+    out["ece"], out["brier"] = float(ece), float(np.mean((s - y) ** 2))
+    out["auroc"] = _auroc(s, y)
+    return out
+
+
+def _auroc(scores: np.ndarray, positives: np.ndarray) -> float | None:
+    """Mann-Whitney estimate of the ROC AUC (ties count half), ``None`` with a single class."""
+    pos, neg = scores[positives], scores[~positives]
+    if not len(pos) or not len(neg):
+        return None
+    greater = (pos[:, None] > neg[None, :]).sum() + 0.5 * (pos[:, None] == neg[None, :]).sum()
+    return float(greater / (len(pos) * len(neg)))
+
+
 def thresholds() -> dict:
     """Every threshold above, for reports."""
     return {
@@ -213,5 +252,6 @@ def thresholds() -> dict:
         "grasp_match_angle_deg": GRASP_MATCH_ANGLE_DEG,
         "relaxed_position_m": RELAXED_POSITION_M,
         "relaxed_angle_deg": RELAXED_ANGLE_DEG,
+        "calibration_bins": CALIBRATION_BINS,
         "flip": np.asarray(FLIP_Z).tolist(),
     }
