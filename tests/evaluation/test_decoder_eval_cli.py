@@ -60,3 +60,18 @@ def test_eval_decoder_cli_writes_a_complete_report(tmp_path):
     assert row["calibration"]["count"] == sum(len(s["grasp_scores"]) for s in executed)
     assert all(len(s["grasp_scores"]) == len(s["grasp_successes"]) <= 5 for s in executed)
     assert report["summary"]["calibration_all_groups"]["count"] >= row["calibration"]["count"]
+
+
+def test_a_namesake_of_a_training_object_is_not_given_its_code(tmp_path):
+    """Seed 0 dishwasher_0000 is a training object of the shipped decoder; seed 7's dishwasher_0000 is another
+    object with the same id: it must be evaluated as a held-out object (fitted code), not with its namesake's."""
+    from centerart.evaluation.decoder_eval import trained_object_ids
+    from centerart.models.checkpoint import load_decoder
+
+    loaded = load_decoder(None)
+    for seed in (0, 7):
+        generate_objects(
+            GenerateObjectsConfig(out=tmp_path / str(seed), category="dishwasher", count=1, seed=seed, workers=1)
+        )
+    assert trained_object_ids(loaded, tmp_path / "0", ["dishwasher_0000"]) == {"dishwasher_0000"}
+    assert trained_object_ids(loaded, tmp_path / "7", ["dishwasher_0000"]) == set()

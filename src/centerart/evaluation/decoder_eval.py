@@ -4,7 +4,8 @@ Groups (from the split stored in the checkpoint):
 
 - ``train``: training objects at their training states (trained codes);
 - ``heldout_state``: training objects at held-out joint states (trained codes, unseen joint codes);
-- ``heldout_object``: objects without a trained code (held out in training, or any other object in --data);
+- ``heldout_object``: objects without a trained code (held out in training, or any other object in --data, also
+  one that shares an id but not its content with a training object: :func:`trained_object_ids`);
   their code is fitted to all their SDF samples with the decoder frozen (``models/code_fitting.py``).
 
 Per (object, state), in the object's canonical frame:
@@ -169,12 +170,13 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
     grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k, cfg.top_k_coverage))
     results: list[StateResult] = []
     codes: dict[str, np.ndarray] = {}
-    for oid, g, k in tqdm(_jobs(loaded, by_obj, cfg), desc="eval decoder"):
+    trained = trained_object_ids(loaded, Path(cfg.objects), sorted(by_obj))
+    for oid, g, k in tqdm(_jobs(loaded, by_obj, trained, cfg), desc="eval decoder"):
         obj_folder = Path(cfg.objects) / oid
         if not obj_folder.is_dir():
             raise CenterArtError(f"{obj_folder}: object folder missing (needed for the true mesh of {oid})")
         if oid not in codes:
-            codes[oid] = _object_code(loaded, oid, by_obj[oid], cfg)
+            codes[oid] = _object_code(loaded, oid, oid in trained, by_obj[oid], cfg)
         st = next(s for s in by_obj[oid] if s.state_index == k)
         results.append(_evaluate_state(loaded, codes[oid], obj_folder, st, g, cfg, mesh_cfg, grasp_cfg))
     report = _report(cfg, loaded, results)
@@ -184,7 +186,23 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
     return report
 
 
-def _jobs(loaded, by_obj: dict[str, list], cfg: EvalDecoderConfig) -> list[tuple[str, str, int]]:
+def trained_object_ids(loaded, objects: Path, object_ids: list[str]) -> set[str]:
+    """The ids among ``object_ids`` whose trained code belongs to this very object: the checkpoint has a code of
+    that id and, where it recorded the object's content fingerprint, the folder ``objects/<id>`` has the same one.
+    Ids are not identities (seed-0 and seed-9000 ``oven_0003`` are different objects): without this check a test
+    object would be decoded with the code of its namesake. An id without a recorded fingerprint is trusted."""
+    from centerart.assets.fingerprint import object_fingerprint
+    from centerart.evaluation.heldout import checkpoint_training_objects
+
+    recorded = {oid: fp for fp, oid in checkpoint_training_objects(loaded.path, "decoder").fingerprints.items()}
+    trained = set()
+    for oid in object_ids:
+        if oid in loaded.codes and (oid not in recorded or object_fingerprint(objects / oid) == recorded[oid]):
+            trained.add(oid)
+    return trained
+
+
+def _jobs(loaded, by_obj: dict[str, list], trained_ids: set[str], cfg: EvalDecoderConfig) -> list[tuple[str, str, int]]:
     """(object id, group, state index) to evaluate: at most ``states_per_object`` per (object, group)."""
     from centerart.training.decoder_data import DecoderSplit
 
@@ -192,7 +210,7 @@ def _jobs(loaded, by_obj: dict[str, list], cfg: EvalDecoderConfig) -> list[tuple
     objects = sorted(by_obj)[: cfg.max_objects] if cfg.max_objects else sorted(by_obj)
     jobs = []
     for oid in objects:
-        trained = oid in loaded.codes
+        trained = oid in trained_ids
         groups: dict[str, list[int]] = {}
         for s in by_obj[oid]:
             if not trained:
@@ -207,11 +225,11 @@ def _jobs(loaded, by_obj: dict[str, list], cfg: EvalDecoderConfig) -> list[tuple
     return jobs
 
 
-def _object_code(loaded, oid: str, states: list, cfg: EvalDecoderConfig) -> np.ndarray:
+def _object_code(loaded, oid: str, trained: bool, states: list, cfg: EvalDecoderConfig) -> np.ndarray:
     """The trained shape code, or one fitted to all the object's SDF samples with the decoder frozen."""
     from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
 
-    if oid in loaded.codes:
+    if trained:
         return loaded.code(oid)
     obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
     code, _, _ = fit_code(

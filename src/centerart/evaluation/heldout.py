@@ -1,10 +1,12 @@
 """Test objects must be objects no model was trained on: the check, by content fingerprint.
 
 A checkpoint lists its training objects (``training_objects``: id -> fingerprint, written by the training
-commands). Checkpoints made before fingerprints were recorded list ids only; for the shipped ones,
-``weights/training_objects.json`` holds the fingerprints, keyed by the checkpoint file's sha256 (so it applies to
-those exact files and nothing else). A checkpoint known by ids only refuses every test object with one of those
-ids, because an id alone cannot prove two objects differ.
+commands). Checkpoints made before fingerprints were recorded list ids only, and those made before the current
+fingerprint scheme (``assets.fingerprint.is_current``) list fingerprints that change with the code version; for
+the shipped ones, ``weights/training_objects.json`` holds current fingerprints, keyed by the checkpoint file's
+sha256 (so it applies to those exact files and nothing else), and takes precedence over such a record. A
+checkpoint known by ids only refuses every test object with one of those ids, because an id alone cannot prove
+two objects differ.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from centerart.assets.fingerprint import is_current
 from centerart.errors import CenterArtError
 from centerart.models.checkpoint import FORMAT as DECODER_FORMAT
 from centerart.models.checkpoint import VERSION as DECODER_VERSION
@@ -41,7 +44,9 @@ def checkpoint_training_objects(path: Path, kind: str) -> TrainingObjects:
     fmt, version = (DECODER_FORMAT, DECODER_VERSION) if kind == "decoder" else (ENCODER_FORMAT, ENCODER_VERSION)
     blob = read_blob(path, fmt, version, kind)
     ids = list(blob["object_ids"] if kind == "decoder" else (blob.get("decoder") or {}).get("object_ids", []))
-    recorded = dict(blob.get("training_objects") or {}) or _shipped(path)
+    recorded = dict(blob.get("training_objects") or {})
+    if not recorded or any(fp and not is_current(fp) for fp in recorded.values()):
+        recorded = _shipped(path) or {oid: None for oid in recorded}  # outdated fingerprints prove nothing
     fingerprints = {fp: oid.split("@")[0] for oid, fp in recorded.items() if fp}
     ids_only = {oid.split("@")[0] for oid, fp in recorded.items() if not fp}
     if not recorded:
