@@ -7,6 +7,7 @@ from torch import nn
 
 from centerart.evaluation.decoder_eval import grasp_matches
 from centerart.inference.decoder_grasps import GraspExtractionConfig, extract_grasps, rotation_angle_symmetric
+from centerart.inference.grasp_geometry import GeometryCheckConfig
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
 from centerart.models.decoder import DecoderConfig, decode_outputs
 from centerart.training.synthetic import BoxCabinet
@@ -55,7 +56,7 @@ def _run(dec, u, cfg=None):
 def test_grasps_on_moving_part_ranked_and_matching_labels():
     cab = BoxCabinet()
     for u in (0.0, 0.6):
-        _, g = _run(ExactCabinetDecoder(cab), u)
+        _, g = _run(ExactCabinetDecoder(cab), u, GraspExtractionConfig(geometry=GeometryCheckConfig(enabled=False)))
         assert len(g) >= 3
         assert np.all(np.diff(g.scores) <= 1e-12)  # ranked best first
         assert 0.0 < g.scores[0] < 1.0
@@ -78,5 +79,33 @@ def test_static_part_grasps_are_dropped():
     dec = ExactCabinetDecoder(BoxCabinet(), labels_on_body=True)
     _, g = _run(dec, 0.5)
     assert len(g) == 0
-    _, g = _run(dec, 0.5, GraspExtractionConfig(require_moving=False))
+    _, g = _run(dec, 0.5, GraspExtractionConfig(require_moving=False, geometry=GeometryCheckConfig(enabled=False)))
     assert len(g) > 0
+
+
+def test_clearance_check_drops_edge_pinches_of_a_closed_door():
+    """The exact cabinet's labels pinch the door's free edge across its thickness: ajar, both fingers are in free
+    space; shut, the inner finger would be inside the body, so the clearance check must drop every one of them."""
+    cab = BoxCabinet()
+    _, shut = _run(ExactCabinetDecoder(cab), 0.0)
+    assert len(shut) == 0
+    _, ajar = _run(ExactCabinetDecoder(cab), 0.6)
+    assert len(ajar) >= 3 and grasp_matches(ajar.poses[:3], cab.grasps(0.6)).any(1).all()
+
+
+def test_shell_points_find_grasps_whose_tcp_is_off_the_surface():
+    """Labels 4 cm in front of the door (a handle's TCP): no point of the reconstruction's own (within 2 cm of
+    the surface) is within 2 cm of one; the shell points (up to 4 cm either side of the surface) are."""
+
+    class HandleDecoder(ExactCabinetDecoder):
+        def _labels(self, u):
+            g = self.cab.grasps(u)
+            g[:, :3, 3] += 0.04 * self.cab.door_T(u)[:3, 0]  # the door's outward normal (+x when closed)
+            return g
+
+    dec = HandleDecoder(BoxCabinet())
+    no_check = GeometryCheckConfig(enabled=False)
+    _, without = _run(dec, 0.6, GraspExtractionConfig(shell_points=0, surface_band=0.02, geometry=no_check))
+    _, with_shell = _run(dec, 0.6, GraspExtractionConfig(geometry=no_check))
+    assert len(with_shell) >= 3 and grasp_matches(with_shell.poses[:3], dec._labels(0.6)).any(1).all()
+    assert len(without) == 0

@@ -30,6 +30,7 @@ from __future__ import annotations
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 from tqdm import tqdm
@@ -78,6 +79,9 @@ class EvalDecoderConfig:
     code_fit_steps: int = 200
     seed: int = 0
     max_objects: int | None = None
+    grasp_extraction: Literal["default", "shell", "before"] = "default"
+    """Grasp extraction setting (``inference.decoder_grasps.extraction_setting``): default; shell (no clearance
+    check); before (neither shell points nor clearance check), for A/B measurements."""
 
     def __post_init__(self):
         for name in ("states_per_object", "top_k", "top_k_coverage"):
@@ -153,7 +157,7 @@ def _physics(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
 def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
     """Evaluate a checkpoint per group (see the module doc); writes ``report.json`` to ``cfg.out`` and returns
     the report (``viz.decoder_eval_plots`` draws it)."""
-    from centerart.inference.decoder_grasps import GraspExtractionConfig
+    from centerart.inference.decoder_grasps import extraction_setting
     from centerart.inference.reconstruction import MeshConfig
     from centerart.models.checkpoint import load_decoder
     from centerart.sdf.samples import load_states
@@ -167,7 +171,7 @@ def evaluate_decoder(cfg: EvalDecoderConfig) -> dict:
     for s in states:
         by_obj.setdefault(s.object_id, []).append(s)
     mesh_cfg = MeshConfig(resolution=cfg.resolution)
-    grasp_cfg = GraspExtractionConfig(top_k=max(cfg.top_k, cfg.top_k_coverage))
+    grasp_cfg = extraction_setting(cfg.grasp_extraction, top_k=max(cfg.top_k, cfg.top_k_coverage))
     results: list[StateResult] = []
     codes: dict[str, np.ndarray] = {}
     trained = trained_object_ids(loaded, Path(cfg.objects), sorted(by_obj))

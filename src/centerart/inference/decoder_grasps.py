@@ -2,10 +2,14 @@
 
 All poses are TCP poses (``grasps/gripper.py``) in the object's canonical frame, metres.
 
-1. Candidates: query points of the final reconstruction level (a thin shell around the predicted surface) with
-   |sdf| < ``surface_band`` whose predicted grasp position is close to them (|offset| < ``max_offset``). Far
-   from any label, the training target is the nearest label, so a large predicted offset means "the grasp is
-   elsewhere": such points vote for a grasp but are not used as candidates.
+1. Candidates: query points of the final reconstruction level (a thin shell around the predicted surface) and
+   ``shell_points`` points drawn on the reconstructed surface and moved along its normal by up to
+   ``shell_distance`` either way, with |sdf| < ``surface_band``, whose predicted grasp position is close to them
+   (|offset| < ``max_offset``). Far from any label, the training target is the nearest label, so a large predicted
+   offset means "the grasp is elsewhere": such points vote for a grasp but are not used as candidates. The shell
+   points matter at closed states: a grasp's TCP sits between the fingers, 2-3 cm in front of a closed door at
+   its handle, where the reconstruction's final level has few points or none (it refines only cells the surface
+   crosses); without them a closed oven's handle got no candidate although the field predicts it well there.
 2. Moving part: the candidate's grasp position must be on the part that moves with the joint. The decoder is
    queried there at the joint code +-``moving_delta``; if the SDF there does not change by ``moving_sdf_change``
    metres, the point is on a static part and is dropped (``require_moving``).
@@ -13,27 +17,34 @@ All poses are TCP poses (``grasps/gripper.py``) in the object's canonical frame,
    lies within ``agree_distance`` and ``agree_angle_deg`` of it (rotation counted with the finger-swapped
    gripper as equal). Confidence = support / (support + ``support_half``) * exp(-|offset| / ``offset_scale``),
    in [0, 1): many neighbours that agree and a small offset mean a grasp the network is sure about.
-4. Non-maximum suppression (greedy by confidence; suppress within ``nms_distance`` and ``nms_angle_deg``), then
-   the ``top_k`` best, ranked by confidence.
+4. Non-maximum suppression (greedy by confidence; suppress within ``nms_distance`` and ``nms_angle_deg``) to
+   ``check_pool`` x ``top_k`` grasps, which are checked on the decoded SDF (:mod:`~.grasp_geometry`: the open
+   gripper must stay out of the predicted shape); the ``top_k`` best that pass, ranked by confidence.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
 from centerart.grasps.gripper import FLIP_Z
+from centerart.inference.grasp_geometry import GeometryCheckConfig, clear_grasps
 from centerart.inference.reconstruction import Reconstruction
 from centerart.models.decoder import SGDFDecoder, decode_outputs
 
 
 @dataclass(frozen=True)
 class GraspExtractionConfig:
-    surface_band: float = 0.02
+    surface_band: float = 0.04
     max_offset: float = 0.02
+    shell_points: int = 20000
+    """Extra query points around the reconstructed surface (0: the reconstruction's own points only)."""
+    shell_distance: float = 0.04
+    """How far (m) along the surface normal, either way, the extra points go."""
+    seed: int = 0
     agree_distance: float = 0.015
     agree_angle_deg: float = 20.0
     support_half: float = 5.0
@@ -45,6 +56,24 @@ class GraspExtractionConfig:
     nms_angle_deg: float = 30.0
     top_k: int = 20
     max_candidates: int = 4000
+    geometry: GeometryCheckConfig = field(default_factory=GeometryCheckConfig)
+    check_pool: int = 3
+    """Grasps kept by NMS per returned grasp, for the geometry check to choose from."""
+
+
+def extraction_setting(name: str, **overrides) -> GraspExtractionConfig:
+    """A named extraction setting, for A/B measurements: ``default`` (shell points and the clearance check),
+    ``shell`` (no clearance check) or ``before`` (neither: the reconstruction's own points within 2 cm of the
+    surface, the extraction before both were added)."""
+    off = GeometryCheckConfig(enabled=False)
+    settings = {
+        "default": {},
+        "shell": {"geometry": off},
+        "before": {"surface_band": 0.02, "shell_points": 0, "geometry": off},
+    }
+    if name not in settings:
+        raise ValueError(f"grasp extraction setting {name!r}: expected one of {sorted(settings)}")
+    return GraspExtractionConfig(**(settings[name] | overrides))
 
 
 @dataclass
@@ -82,16 +111,17 @@ def extract_grasps(
     """Ranked grasps on the moving part at normalized joint code ``joint`` (see module doc)."""
     if recon.raw is None or len(recon.points) == 0:
         return _empty()
-    out = decode_outputs(recon.raw)
+    points, sdf, raw = _query_points(decoder, code, joint, recon, cfg, device)
+    out = decode_outputs(raw)
     offset = out.offset.numpy()
     off_norm = np.linalg.norm(offset, axis=1)
-    keep = (np.abs(recon.sdf) < cfg.surface_band) & (off_norm < cfg.max_offset)
+    keep = (np.abs(sdf) < cfg.surface_band) & (off_norm < cfg.max_offset)
     if not keep.any():
         return _empty()
     idx = np.flatnonzero(keep)
     if len(idx) > cfg.max_candidates:  # the best-offset candidates; deterministic
         idx = idx[np.argsort(off_norm[idx], kind="stable")[: cfg.max_candidates]]
-    pos = recon.points[idx] + offset[idx]
+    pos = points[idx] + offset[idx]
     rot = out.rotation.numpy()[idx]
     off = off_norm[idx]
     if cfg.require_moving:
@@ -109,11 +139,21 @@ def extract_grasps(
         if len(nb):
             support[i] = int((rotation_angle_symmetric(rot[i][None], rot[nb]) < max_angle).sum())
     score = support / (support + cfg.support_half) * np.exp(-off / cfg.offset_scale)
-    order = np.argsort(-score, kind="stable")
+    c = _nms(pos, rot, score, cfg, cfg.top_k * (cfg.check_pool if cfg.geometry.enabled else 1))
+    poses = np.tile(np.eye(4), (len(c), 1, 1))
+    poses[:, :3, :3] = rot[c]
+    poses[:, :3, 3] = pos[c]
+    ok = np.flatnonzero(clear_grasps(_sdf_fn(decoder, code, joint, device), poses, cfg.geometry))[: cfg.top_k]
+    return DecoderGrasps(poses[ok], score[c][ok], support[c][ok])
+
+
+def _nms(pos: np.ndarray, rot: np.ndarray, score: np.ndarray, cfg: GraspExtractionConfig, limit: int) -> np.ndarray:
+    """Indices of up to ``limit`` grasps, best score first, none within ``nms_distance`` and ``nms_angle_deg`` of
+    a better one."""
     chosen: list[int] = []
     nms_angle = np.deg2rad(cfg.nms_angle_deg)
-    for i in order:
-        if len(chosen) >= cfg.top_k:
+    for i in np.argsort(-score, kind="stable"):
+        if len(chosen) >= limit:
             break
         if chosen:
             c = np.asarray(chosen)
@@ -121,24 +161,49 @@ def extract_grasps(
             if close.any() and (rotation_angle_symmetric(rot[i][None], rot[c[close]]) < nms_angle).any():
                 continue
         chosen.append(int(i))
-    c = np.asarray(chosen, int)
-    poses = np.tile(np.eye(4), (len(c), 1, 1))
-    poses[:, :3, :3] = rot[c]
-    poses[:, :3, 3] = pos[c]
-    return DecoderGrasps(poses, score[c], support[c])
+    return np.asarray(chosen, int)
+
+
+def _sdf_fn(decoder, code, joint: float, device):
+    """The decoder's SDF at a fixed shape and joint code, object-frame points (N, 3) -> (N,), in chunks."""
+    z = torch.as_tensor(np.asarray(code, np.float32), device=device)
+
+    def fn(points: np.ndarray) -> np.ndarray:
+        out = []
+        with torch.no_grad():
+            for i in range(0, len(points), 65536):
+                x = torch.as_tensor(np.asarray(points[i : i + 65536], np.float32), device=device)
+                j = torch.full((len(x),), float(joint), device=device)
+                out.append(decoder.sdf_only(z.expand(len(x), -1), j, x).cpu().numpy())
+        return np.concatenate(out) if out else np.zeros(0, np.float32)
+
+    return fn
+
+
+def _query_points(decoder, code, joint, recon: Reconstruction, cfg: GraspExtractionConfig, device):
+    """(points, sdf, raw outputs): the reconstruction's final level plus the seeded shell points (object frame)."""
+    import trimesh
+
+    from centerart.inference.reconstruction import decoder_field
+
+    if not cfg.shell_points or len(recon.mesh.faces) == 0:
+        return recon.points, recon.sdf, recon.raw
+    rng = np.random.default_rng(cfg.seed)
+    on_surface, face = trimesh.sample.sample_surface(recon.mesh, cfg.shell_points, seed=rng)
+    along = rng.uniform(-cfg.shell_distance, cfg.shell_distance, size=(len(face), 1))
+    shell = np.asarray(on_surface + along * recon.mesh.face_normals[face], np.float32)
+    sdf, raw = decoder_field(decoder, code, joint, device=device)(shell)
+    raw_all = np.concatenate([np.asarray(recon.raw, np.float32), raw])
+    return np.concatenate([recon.points, shell]), np.concatenate([recon.sdf, sdf]), raw_all
 
 
 def _on_moving_part(decoder, code, joint, pos, cfg, device) -> np.ndarray:
     """True where the predicted SDF at the grasp position changes when the joint moves by +-moving_delta."""
-    x = torch.as_tensor(pos, dtype=torch.float32, device=device)
-    z = torch.as_tensor(np.asarray(code, np.float32), device=device).expand(len(x), -1)
+    base = _sdf_fn(decoder, code, joint, device)(pos)
     change = np.zeros(len(pos))
-    with torch.no_grad():
-        base = decoder.sdf_only(z, torch.full((len(x),), float(joint), device=device), x)
-        for j in (joint - cfg.moving_delta, joint + cfg.moving_delta):
-            if 0.0 <= j <= 1.0:
-                other = decoder.sdf_only(z, torch.full((len(x),), float(j), device=device), x)
-                change = np.maximum(change, (other - base).abs().cpu().numpy())
+    for j in (joint - cfg.moving_delta, joint + cfg.moving_delta):
+        if 0.0 <= j <= 1.0:
+            change = np.maximum(change, np.abs(_sdf_fn(decoder, code, j, device)(pos) - base))
     return change > cfg.moving_sdf_change
 
 

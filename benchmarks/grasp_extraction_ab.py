@@ -1,0 +1,102 @@
+"""A/B of the decoder's grasp extraction on training objects: physics top-1 / any-of-5 at the closed and the fully
+open state, for three extraction settings on the same reconstruction. Prints JSON.
+
+    python benchmarks/grasp_extraction_ab.py --data runs/small --objects-per-category 0:8 \
+        --out benchmarks/results/grasp_extraction/ab_shipped.json
+
+Settings (``inference.decoder_grasps.extraction_setting``): ``before`` (the reconstruction's own points within 2
+cm of the surface, no clearance check: the extraction before the shell points), ``shell`` (plus 20k points up to 4
+cm either side of the surface), ``default`` (plus the open-gripper clearance check). ``--data`` is the folder that
+holds the checkpoint's training ``objects/`` (a recipe's output folder); the objects are the checkpoint's trained
+codes, ``--objects-per-category A:B`` of each category in id order. Every top-5 grasp is executed with the grasp-label
+executor (``grasps/executor.py``); a missing grasp is a failure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from bench_report import emit
+from centerart.assets.articulated_object import ArticulatedObject
+from centerart.inference.decoder_grasps import extract_grasps, extraction_setting
+from centerart.inference.reconstruction import MeshConfig, reconstruct_object
+from centerart.models.checkpoint import load_decoder
+
+SETTINGS = {name: extraction_setting(name) for name in ("before", "shell", "default")}
+STATES = {"closed": 0.0, "open": 1.0}
+
+
+def execute(obj, q: float, poses: np.ndarray) -> list[bool]:
+    import pybullet as pb
+
+    from centerart.grasps import executor as ex
+    from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
+
+    client = connect()
+    try:
+        target = spawn_object_in_pybullet(client, obj, q)
+        executor = ex.GraspExecutor(client)
+        direction = ex.commanded_direction(obj.joint_type, q, obj.joint_range[1])
+        return [bool(executor.execute(p, target, direction).success) for p in poses[:5]]
+    finally:
+        pb.disconnect(client)
+
+
+def pick_objects(codes: dict, span: str) -> list[str]:
+    a, b = (int(x) for x in span.split(":"))
+    per_category: dict[str, list[str]] = {}
+    for oid in sorted(codes):
+        per_category.setdefault(oid.rsplit("_", 1)[0], []).append(oid)
+    return [oid for ids in per_category.values() for oid in ids[a:b]]
+
+
+def summarize(rows: list[dict]) -> dict:
+    out = {}
+    for name in SETTINGS:
+        out[name] = {}
+        for kind in STATES:
+            rs = [r[name] for r in rows if r["state"] == kind]
+            out[name][kind] = {
+                "states": len(rs),
+                "top1": float(np.mean([bool(r["ok"]) and r["ok"][0] for r in rs])),
+                "any5": float(np.mean([any(r["ok"]) for r in rs])),
+                "no_grasp": sum(r["count"] == 0 for r in rs),
+                "seconds_extraction": float(np.mean([r["seconds"] for r in rs])),
+            }
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, required=True, help="folder with the training objects/ (a recipe's --out)")
+    ap.add_argument("--checkpoint", type=Path, default=None, help="decoder (default: the shipped one)")
+    ap.add_argument("--objects-per-category", default="0:8")
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    loaded = load_decoder(args.checkpoint)
+    rows = []
+    for oid in pick_objects(loaded.codes, args.objects_per_category):
+        obj = ArticulatedObject.load(args.data / "objects" / oid)
+        for kind, u in STATES.items():
+            recon = reconstruct_object(loaded.decoder, loaded.code(oid), u, loaded.bounds, MeshConfig(resolution=128))
+            row = {"object_id": oid, "state": kind}
+            for name, cfg in SETTINGS.items():
+                t0 = time.perf_counter()
+                g = extract_grasps(loaded.decoder, loaded.code(oid), u, recon, cfg)
+                seconds = time.perf_counter() - t0
+                row[name] = {"count": len(g), "ok": execute(obj, obj.denormalize(u), g.poses), "seconds": seconds}
+            rows.append(row)
+    report = {"checkpoint": str(loaded.path), "objects_per_category": args.objects_per_category,
+              "summary": summarize(rows), "states": rows}  # fmt: skip
+    emit(report, args.out)
+
+
+if __name__ == "__main__":
+    main()
