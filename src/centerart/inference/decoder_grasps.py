@@ -3,8 +3,8 @@
 All poses are TCP poses (``grasps/gripper.py``) in the object's canonical frame, metres.
 
 1. Candidates: query points of the final reconstruction level (a thin shell around the predicted surface) and
-   ``shell_points`` points drawn on the reconstructed surface and moved along its normal by up to
-   ``shell_distance`` either way, with |sdf| < ``surface_band``, whose predicted grasp position is close to them
+   ``shell_points`` points drawn on the reconstructed surface and moved out along its normal by up to
+   ``shell_distance``, with |sdf| < ``surface_band``, whose predicted grasp position is close to them
    (|offset| < ``max_offset``). Far from any label, the training target is the nearest label, so a large predicted
    offset means "the grasp is elsewhere": such points vote for a grasp but are not used as candidates. The shell
    points matter at closed states: a grasp's TCP sits between the fingers, 2-3 cm in front of a closed door at
@@ -40,10 +40,10 @@ from centerart.models.decoder import SGDFDecoder, decode_outputs
 class GraspExtractionConfig:
     surface_band: float = 0.04
     max_offset: float = 0.02
-    shell_points: int = 20000
-    """Extra query points around the reconstructed surface (0: the reconstruction's own points only)."""
+    shell_points: int = 6000
+    """Extra query points in front of the reconstructed surface (0: the reconstruction's own points only)."""
     shell_distance: float = 0.04
-    """How far (m) along the surface normal, either way, the extra points go."""
+    """How far (m) along the outward surface normal the extra points go."""
     seed: int = 0
     agree_distance: float = 0.015
     agree_angle_deg: float = 20.0
@@ -190,7 +190,8 @@ def _query_points(decoder, code, joint, recon: Reconstruction, cfg: GraspExtract
         return recon.points, recon.sdf, recon.raw
     rng = np.random.default_rng(cfg.seed)
     on_surface, face = trimesh.sample.sample_surface(recon.mesh, cfg.shell_points, seed=rng)
-    along = rng.uniform(-cfg.shell_distance, cfg.shell_distance, size=(len(face), 1))
+    # Outward only: the reconstruction's own points already cover both sides within a cell of the surface.
+    along = rng.uniform(0.0, cfg.shell_distance, size=(len(face), 1))
     shell = np.asarray(on_surface + along * recon.mesh.face_normals[face], np.float32)
     sdf, raw = decoder_field(decoder, code, joint, device=device)(shell)
     raw_all = np.concatenate([np.asarray(recon.raw, np.float32), raw])
