@@ -8,7 +8,14 @@ Settings (``inference.decoder_grasps.extraction_setting``): ``before`` (the reco
 cm of the surface, no clearance check: the extraction before the shell points), ``shell`` (plus 20k points up to 4
 cm either side of the surface), ``default`` (plus the open-gripper clearance check). ``--data`` is the folder that
 holds the checkpoint's training ``objects/`` (a recipe's output folder); the objects are the checkpoint's trained
-codes, ``--objects-per-category A:B`` of each category in id order. Every top-5 grasp is executed with the grasp-label
+codes, ``--objects-per-category A:B`` of each category in id order. With ``--fit-codes-from SDF``, the objects are
+instead those of ``--objects`` (held-out objects no checkpoint trained on), their codes fitted to their SDF samples
+with the decoder frozen, as ``centerart eval decoder`` does for held-out objects:
+
+    python benchmarks/grasp_extraction_ab.py --objects data/test_objects --fit-codes-from data/test_sdf \
+        --out benchmarks/results/grasp_extraction/ab_shipped_test_objects.json
+
+Every top-5 grasp is executed with the grasp-label
 executor (``grasps/executor.py``); a missing grasp is a failure.
 """
 
@@ -55,6 +62,21 @@ def pick_objects(codes: dict, span: str) -> list[str]:
     return [oid for ids in per_category.values() for oid in ids[a:b]]
 
 
+def fitted_codes(loaded, sdf: Path, steps: int = 200, seed: int = 0) -> dict[str, np.ndarray]:
+    """Object id -> code fitted to all its SDF samples (decoder frozen; ``centerart eval decoder``'s settings)."""
+    from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
+    from centerart.sdf.samples import load_states
+
+    by_object: dict[str, list] = {}
+    for s in load_states(sdf, 30000, seed, progress=False):
+        by_object.setdefault(s.object_id, []).append(s)
+    codes = {}
+    for oid, states in sorted(by_object.items()):
+        obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
+        codes[oid] = fit_code(loaded.decoder, obs, CodeFitConfig(steps=steps, points_per_step=4096, seed=seed))[0]
+    return codes
+
+
 def summarize(rows: list[dict]) -> dict:
     out = {}
     for name in SETTINGS:
@@ -73,7 +95,9 @@ def summarize(rows: list[dict]) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, required=True, help="folder with the training objects/ (a recipe's --out)")
+    ap.add_argument("--data", type=Path, default=None, help="folder with the training objects/ (a recipe's --out)")
+    ap.add_argument("--objects", type=Path, default=None, help="held-out object folders (with --fit-codes-from)")
+    ap.add_argument("--fit-codes-from", type=Path, default=None, help="SDF samples of --objects: fit their codes")
     ap.add_argument("--checkpoint", type=Path, default=None, help="decoder (default: the shipped one)")
     ap.add_argument("--objects-per-category", default="0:8")
     ap.add_argument("--threads", type=int, default=1)
@@ -81,19 +105,24 @@ def main() -> None:
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     loaded = load_decoder(args.checkpoint)
+    if args.fit_codes_from is not None:
+        codes, objects = fitted_codes(loaded, args.fit_codes_from), args.objects
+    else:
+        codes = {oid: loaded.code(oid) for oid in pick_objects(loaded.codes, args.objects_per_category)}
+        objects = args.data / "objects"
     rows = []
-    for oid in pick_objects(loaded.codes, args.objects_per_category):
-        obj = ArticulatedObject.load(args.data / "objects" / oid)
+    for oid, code in codes.items():
+        obj = ArticulatedObject.load(objects / oid)
         for kind, u in STATES.items():
-            recon = reconstruct_object(loaded.decoder, loaded.code(oid), u, loaded.bounds, MeshConfig(resolution=128))
+            recon = reconstruct_object(loaded.decoder, code, u, loaded.bounds, MeshConfig(resolution=128))
             row = {"object_id": oid, "state": kind}
             for name, cfg in SETTINGS.items():
                 t0 = time.perf_counter()
-                g = extract_grasps(loaded.decoder, loaded.code(oid), u, recon, cfg)
+                g = extract_grasps(loaded.decoder, code, u, recon, cfg)
                 seconds = time.perf_counter() - t0
                 row[name] = {"count": len(g), "ok": execute(obj, obj.denormalize(u), g.poses), "seconds": seconds}
             rows.append(row)
-    report = {"checkpoint": str(loaded.path), "objects_per_category": args.objects_per_category,
+    report = {"checkpoint": str(loaded.path), "objects": str(objects), "fitted_codes": args.fit_codes_from is not None,
               "summary": summarize(rows), "states": rows}  # fmt: skip
     emit(report, args.out)
 
