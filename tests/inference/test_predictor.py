@@ -30,11 +30,17 @@ def predictor():
 
 
 @pytest.fixture(scope="module")
-def training_kitchen(tmp_path_factory):
-    """One kitchen of the shipped decoder's training objects (seed 0, index 0 of each category), two D415 views:
-    the folder (objects/, scenes/)."""
+def training_kitchen(tmp_path_factory, predictor):
+    """One kitchen of the shipped decoder's training objects (seed 0, the first training object of each category
+    by index: the split holds some out), two D415 views: the folder (objects/, scenes/)."""
+    import shutil
+
     root = tmp_path_factory.mktemp("train_kitchen")
-    generate_objects(GenerateObjectsConfig(out=root / "objects", category="all", count=1, seed=0, workers=1))
+    generate_objects(GenerateObjectsConfig(out=root / "candidates", category="all", count=3, seed=0, workers=1))
+    trained = set(predictor.decoder.codes)
+    for category in sorted({f.name.rsplit("_", 1)[0] for f in (root / "candidates").iterdir() if f.is_dir()}):
+        first = next(f for f in sorted((root / "candidates").glob(f"{category}_*")) if f.name in trained)
+        shutil.copytree(first, root / "objects" / first.name)
     generate_scenes(
         GenerateScenesConfig(
             objects=root / "objects", out=root / "scenes", layout="kitchen", count=1, views_per_scene=2, seed=21,
