@@ -1,5 +1,6 @@
-"""A/B of the decoder's grasp extraction on training objects: physics top-1 / any-of-5 at the closed and the fully
-open state, for three extraction settings on the same reconstruction. Prints JSON.
+"""A/B of the decoder's grasp extraction: physics top-1 / any-of-5 at the closed and the fully open state, for
+three extraction settings on the same reconstruction, and that reconstruction's Chamfer-L1 / F-score@1cm against
+the true mesh. Prints JSON.
 
     python benchmarks/grasp_extraction_ab.py --data runs/small --objects-per-category 0:8 \
         --out benchmarks/results/grasp_extraction/ab_shipped.json
@@ -30,6 +31,7 @@ import torch
 
 from bench_report import emit
 from centerart.assets.articulated_object import ArticulatedObject
+from centerart.evaluation.decoder_eval import chamfer_fscore
 from centerart.inference.decoder_grasps import extract_grasps, extraction_setting
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
 from centerart.models.checkpoint import load_decoder
@@ -78,7 +80,18 @@ def fitted_codes(loaded, sdf: Path, steps: int = 200, seed: int = 0) -> dict[str
 
 
 def summarize(rows: list[dict]) -> dict:
-    out = {}
+    """Per setting and state kind: top-1, any of 5, states without a grasp; and the shape (Chamfer-L1 mm mean and
+    median over finite values, F-score@1cm) per state kind."""
+    out = {"shape": {}}
+    for kind in STATES:
+        cd = [r["chamfer_mm"] for r in rows if r["state"] == kind and np.isfinite(r["chamfer_mm"])]
+        fs = [r["fscore"] for r in rows if r["state"] == kind]
+        out["shape"][kind] = {
+            "chamfer_mm": float(np.mean(cd)) if cd else None,
+            "chamfer_mm_median": float(np.median(cd)) if cd else None,
+            "fscore": float(np.mean(fs)) if fs else None,
+            "empty_meshes": len(fs) - len(cd),
+        }
     for name in SETTINGS:
         out[name] = {}
         for kind in STATES:
@@ -114,13 +127,15 @@ def main() -> None:
     for oid, code in codes.items():
         obj = ArticulatedObject.load(objects / oid)
         for kind, u in STATES.items():
+            q = obj.denormalize(u)
             recon = reconstruct_object(loaded.decoder, code, u, loaded.bounds, MeshConfig(resolution=128))
-            row = {"object_id": oid, "state": kind}
+            chamfer, fscore = chamfer_fscore(recon.mesh, obj.watertight_mesh(q))
+            row = {"object_id": oid, "state": kind, "chamfer_mm": chamfer, "fscore": fscore}
             for name, cfg in SETTINGS.items():
                 t0 = time.perf_counter()
                 g = extract_grasps(loaded.decoder, code, u, recon, cfg)
                 seconds = time.perf_counter() - t0
-                row[name] = {"count": len(g), "ok": execute(obj, obj.denormalize(u), g.poses), "seconds": seconds}
+                row[name] = {"count": len(g), "ok": execute(obj, q, g.poses), "seconds": seconds}
             rows.append(row)
     report = {"checkpoint": str(loaded.path), "objects": str(objects), "fitted_codes": args.fit_codes_from is not None,
               "summary": summarize(rows), "states": rows}  # fmt: skip
