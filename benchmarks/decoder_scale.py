@@ -1,15 +1,14 @@
-"""Decoder generalization against the number of training objects: collects ``centerart eval decoder`` reports of
+"""Decoder generalization against the number of training objects: collects ``grasp_extraction_ab.py`` results of
 several decoders (one folder each) into one table and draws the curves. Prints JSON.
 
-    python benchmarks/decoder_scale.py --run 17 benchmarks/results/decoder_scale/objects_020 \
-        --run 34 benchmarks/results/decoder_scale/objects_040 --run 102 benchmarks/results/decoder_scale/objects_120 \
-        --out benchmarks/results/decoder_scale/curve.json
+    python benchmarks/decoder_scale.py --run 34 benchmarks/results/decoder_scale/objects_040 \
+        --run 102 benchmarks/results/decoder_scale/objects_120 --out benchmarks/results/decoder_scale/curve.json
 
-Each run folder holds the reports of one checkpoint, as many as were measured: ``train/report.json`` (the
-checkpoint's own SDF folder: training objects at training states, held-out states, its own held-out objects),
-``test/report.json`` (the held-out test objects, seed 9000, never trained on by any run) and ``real/report.json``
-(the PartNet-Mobility samples). Splits: train, heldout_state (from ``train``), test and real (the ``heldout_object``
-group of ``test`` and ``real``: codes fitted to the object's SDF samples, decoder frozen).
+Each run folder holds, for one checkpoint, as many of these as were measured: ``test.json`` (the held-out test
+objects, seed 9000, never trained on by any run; codes fitted to their SDF samples), ``real.json`` (the
+PartNet-Mobility samples, codes fitted likewise) and ``train.json`` (training objects with their trained codes).
+Per split and state kind (closed, fully open): Chamfer-L1 mean / median (mm), F-score@1cm, physics top-1 and any of
+5 with the default grasp extraction.
 """
 
 from __future__ import annotations
@@ -18,28 +17,32 @@ import argparse
 import json
 from pathlib import Path
 
+import numpy as np
+
 from bench_report import emit
 
-KEYS = ("chamfer_mm", "chamfer_mm_median", "fscore", "physics_top1", "physics_top5", "physics_any5", "states")
-SPLITS = {"train": ("train", "train"), "heldout_state": ("train", "heldout_state"),
-          "test": ("test", "heldout_object"), "real": ("real", "heldout_object")}  # fmt: skip
+SPLITS = ("train", "test", "real")
+KINDS = ("closed", "open")
 
 
 def collect(folder: Path) -> dict:
-    """Split -> metric row (with the closed-state top-1 and the confidence ROC AUC) of one run folder."""
+    """Split -> state kind -> metrics of one run folder (splits without a file are left out)."""
     rows = {}
-    for split, (report_name, group) in SPLITS.items():
-        path = folder / report_name / "report.json"
+    for split in SPLITS:
+        path = folder / f"{split}.json"
         if not path.is_file():
             continue
         summary = json.loads(path.read_text())["summary"]
-        if group not in summary:
-            continue
-        g = summary[group]
-        row = {k: g.get(k) for k in KEYS}
-        row["physics_top1_by_state_kind"] = {k: v.get("physics_top1") for k, v in g.get("by_state_kind", {}).items()}
-        row["confidence_auroc"] = g.get("calibration", {}).get("auroc")
-        rows[split] = row
+        rows[split] = {
+            kind: {**summary["shape"][kind], "top1": summary["default"][kind]["top1"],
+                   "any5": summary["default"][kind]["any5"], "states": summary["default"][kind]["states"]}
+            for kind in KINDS
+        }  # fmt: skip
+        rows[split]["both"] = {
+            key: float(np.mean([rows[split][k][key] for k in KINDS]))
+            for key in ("chamfer_mm", "fscore", "top1", "any5")
+            if all(rows[split][k][key] is not None for k in KINDS)
+        }
     return rows
 
 
@@ -51,16 +54,15 @@ def draw(runs: list[dict], path: Path) -> None:
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), dpi=100)
     for split in SPLITS:
-        pts = [(r["training_objects"], r["splits"][split]) for r in runs if split in r["splits"]]
-        if not pts:
-            continue
-        n = [p[0] for p in pts]
-        for ax, key in zip(axes, ("chamfer_mm", "fscore", "physics_top1"), strict=True):
-            ax.plot(n, [p[1][key] for p in pts], marker="o", label=split)
+        pts = [(r["training_objects"], r["splits"][split]["both"]) for r in runs if split in r["splits"]]
+        for ax, key in zip(axes, ("chamfer_mm", "fscore", "top1"), strict=True):
+            xy = [(n, row[key]) for n, row in pts if key in row]
+            if xy:
+                ax.plot(*zip(*xy, strict=True), marker="o", label=split)
     for ax, label in zip(axes, ("Chamfer-L1 mean (mm)", "F-score@1cm", "physics top-1"), strict=True):
         ax.set_xscale("log")
         ax.set_xlabel("training objects")
-        ax.set_ylabel(label)
+        ax.set_ylabel(f"{label}, closed and open")
         ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path)
