@@ -21,7 +21,7 @@ PresetName = Literal["tiny", "small", "paper"]
 class ObjectsStep:
     """Procedural objects: training objects (``--seed``) and held-out test objects (``--test-seed``)."""
 
-    count: int = 24
+    count: int = 8
     """Training objects per category; the decoder holds a share of them out for validation (never trained on)."""
     test_count: int = 4
     """Test objects per category, generated with ``--test-seed``: no model sees them; the evaluation runs on them."""
@@ -51,9 +51,7 @@ class DecoderStep:
     """Auto-decoder training of the SGDF decoder (``centerart train decoder``)."""
 
     preset: Literal["tiny", "small", "paper"] = "small"
-    epochs: int = 75
-    """Passes over the (object, state) items; with 24 objects per category, 75 epochs are the same 4.8k optimizer
-    steps as 150 epochs over 8 per category (the first shipped decoder's budget)."""
+    epochs: int = 150
     batch_items: int = 8
     points_per_item: int = 2048
     min_items_per_epoch: int = 256
@@ -171,8 +169,8 @@ class RecipeConfig:
 
 # ---------------------------------------------------------------------------- presets
 _SMALL = RecipeConfig(out=Path("runs/recipe-small"), preset="small")
-"""The shipped models' scale (src/centerart/weights/README.md): 24 objects per category, 6 states x 100 labels,
-50k SDF points, small decoder 75 epochs; 139 + 120 training scenes of the decoder's objects, 15 + 20 validation
+"""The shipped models' scale (src/centerart/weights/README.md): 8 objects per category, 6 states x 100 labels,
+50k SDF points, small decoder 150 epochs; 139 + 120 training scenes of the decoder's objects, 15 + 20 validation
 scenes of its held-out objects at 640x480 with stereo depth; small encoder 56 epochs; 4 test objects per category
 (seed 9000) in 100 single and 50 kitchen scenes."""
 
