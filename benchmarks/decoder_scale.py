@@ -34,7 +34,8 @@ def collect(folder: Path) -> dict:
             continue
         summary = json.loads(path.read_text())["summary"]
         rows[split] = {
-            kind: {**summary["shape"][kind], "top1": summary["default"][kind]["top1"],
+            kind: {"chamfer_mm": None, "fscore": None, **summary.get("shape", {}).get(kind, {}),
+                   "top1": summary["default"][kind]["top1"],
                    "any5": summary["default"][kind]["any5"], "states": summary["default"][kind]["states"]}
             for kind in KINDS
         }  # fmt: skip
