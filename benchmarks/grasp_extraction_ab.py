@@ -31,29 +31,13 @@ import torch
 
 from bench_report import emit
 from centerart.assets.articulated_object import ArticulatedObject
-from centerart.evaluation.decoder_eval import chamfer_fscore
+from centerart.evaluation.decoder_eval import chamfer_fscore, execute_grasps, fitted_code
 from centerart.inference.decoder_grasps import extract_grasps, extraction_setting
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
 from centerart.models.checkpoint import load_decoder
 
 SETTINGS = {name: extraction_setting(name) for name in ("before", "shell", "default")}
 STATES = {"closed": 0.0, "open": 1.0}
-
-
-def execute(obj, q: float, poses: np.ndarray) -> list[bool]:
-    import pybullet as pb
-
-    from centerart.grasps import executor as ex
-    from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
-
-    client = connect()
-    try:
-        target = spawn_object_in_pybullet(client, obj, q)
-        executor = ex.GraspExecutor(client)
-        direction = ex.commanded_direction(obj.joint_type, q, obj.joint_range[1])
-        return [bool(executor.execute(p, target, direction).success) for p in poses[:5]]
-    finally:
-        pb.disconnect(client)
 
 
 def pick_objects(codes: dict, span: str) -> list[str]:
@@ -66,17 +50,12 @@ def pick_objects(codes: dict, span: str) -> list[str]:
 
 def fitted_codes(loaded, sdf: Path, steps: int = 200, seed: int = 0) -> dict[str, np.ndarray]:
     """Object id -> code fitted to all its SDF samples (decoder frozen; ``centerart eval decoder``'s settings)."""
-    from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
     from centerart.sdf.samples import load_states
 
     by_object: dict[str, list] = {}
     for s in load_states(sdf, 30000, seed, progress=False):
         by_object.setdefault(s.object_id, []).append(s)
-    codes = {}
-    for oid, states in sorted(by_object.items()):
-        obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
-        codes[oid] = fit_code(loaded.decoder, obs, CodeFitConfig(steps=steps, points_per_step=4096, seed=seed))[0]
-    return codes
+    return {oid: fitted_code(loaded.decoder, states, steps, seed) for oid, states in sorted(by_object.items())}
 
 
 def summarize(rows: list[dict]) -> dict:
@@ -135,7 +114,7 @@ def main() -> None:
                 t0 = time.perf_counter()
                 g = extract_grasps(loaded.decoder, code, u, recon, cfg)
                 seconds = time.perf_counter() - t0
-                row[name] = {"count": len(g), "ok": execute(obj, q, g.poses), "seconds": seconds}
+                row[name] = {"count": len(g), "ok": execute_grasps(obj, q, g.poses, 5), "seconds": seconds}
             rows.append(row)
     report = {"checkpoint": str(loaded.path), "objects": str(objects), "fitted_codes": args.fit_codes_from is not None,
               "summary": summarize(rows), "states": rows}  # fmt: skip

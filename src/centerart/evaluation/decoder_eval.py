@@ -137,7 +137,7 @@ def _select(indices: list[int], k: int) -> list[int]:
     return [indices[i] for i in np.linspace(0, len(indices) - 1, k).round().astype(int)]
 
 
-def _physics(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
+def execute_grasps(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
     """Execute up to k TCP poses (object frame = world frame here) on the object at state q."""
     import pybullet as pb
 
@@ -231,15 +231,15 @@ def _jobs(loaded, by_obj: dict[str, list], trained_ids: set[str], cfg: EvalDecod
 
 def _object_code(loaded, oid: str, trained: bool, states: list, cfg: EvalDecoderConfig) -> np.ndarray:
     """The trained shape code, or one fitted to all the object's SDF samples with the decoder frozen."""
+    return loaded.code(oid) if trained else fitted_code(loaded.decoder, states, cfg.code_fit_steps, cfg.seed)
+
+
+def fitted_code(decoder, states: list, steps: int, seed: int) -> np.ndarray:
+    """A shape code fitted to all of one object's SDF samples (``sdf.samples.StateData``), decoder frozen."""
     from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
 
-    if trained:
-        return loaded.code(oid)
     obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
-    code, _, _ = fit_code(
-        loaded.decoder, obs, CodeFitConfig(steps=cfg.code_fit_steps, points_per_step=4096, seed=cfg.seed)
-    )
-    return code
+    return fit_code(decoder, obs, CodeFitConfig(steps=steps, points_per_step=4096, seed=seed))[0]
 
 
 def _evaluate_state(loaded, code, obj_folder: Path, st, group: str, cfg, mesh_cfg, grasp_cfg) -> StateResult:
@@ -258,7 +258,7 @@ def _evaluate_state(loaded, code, obj_folder: Path, st, group: str, cfg, mesh_cf
     if cfg.grasps is not None:
         _label_metrics(r, grasps.poses, cfg)
     if cfg.physics:
-        ok = _physics(obj, q, grasps.poses, 5)
+        ok = execute_grasps(obj, q, grasps.poses, 5)
         r.grasp_scores, r.grasp_successes = [float(x) for x in grasps.scores[: len(ok)]], ok
         ok = ok + [False] * (5 - len(ok))
         r.physics_top1, r.physics_top5, r.physics_any5 = float(ok[0]), float(np.mean(ok)), float(any(ok))

@@ -235,12 +235,14 @@ def score_calibration(scores: np.ndarray, outcomes: np.ndarray, bins: int = CALI
 
 
 def _auroc(scores: np.ndarray, positives: np.ndarray) -> float | None:
-    """Mann-Whitney estimate of the ROC AUC (ties count half), ``None`` with a single class."""
+    """ROC AUC as the Mann-Whitney U of the successes over the failures (ties count half), ``None`` with a single
+    class (scipy ranks in O(n log n); a pairwise comparison would hold n_pos x n_neg booleans)."""
+    from scipy.stats import mannwhitneyu
+
     pos, neg = scores[positives], scores[~positives]
     if not len(pos) or not len(neg):
         return None
-    greater = (pos[:, None] > neg[None, :]).sum() + 0.5 * (pos[:, None] == neg[None, :]).sum()
-    return float(greater / (len(pos) * len(neg)))
+    return float(mannwhitneyu(pos, neg).statistic / (len(pos) * len(neg)))
 
 
 def thresholds() -> dict:

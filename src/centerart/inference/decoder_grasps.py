@@ -32,7 +32,7 @@ from scipy.spatial import cKDTree
 
 from centerart.grasps.gripper import FLIP_Z
 from centerart.inference.grasp_geometry import GeometryCheckConfig, clear_grasps
-from centerart.inference.reconstruction import Reconstruction
+from centerart.inference.reconstruction import Reconstruction, decoder_field
 from centerart.models.decoder import SGDFDecoder, decode_outputs
 
 
@@ -165,26 +165,14 @@ def _nms(pos: np.ndarray, rot: np.ndarray, score: np.ndarray, cfg: GraspExtracti
 
 
 def _sdf_fn(decoder, code, joint: float, device):
-    """The decoder's SDF at a fixed shape and joint code, object-frame points (N, 3) -> (N,), in chunks."""
-    z = torch.as_tensor(np.asarray(code, np.float32), device=device)
-
-    def fn(points: np.ndarray) -> np.ndarray:
-        out = []
-        with torch.no_grad():
-            for i in range(0, len(points), 65536):
-                x = torch.as_tensor(np.asarray(points[i : i + 65536], np.float32), device=device)
-                j = torch.full((len(x),), float(joint), device=device)
-                out.append(decoder.sdf_only(z.expand(len(x), -1), j, x).cpu().numpy())
-        return np.concatenate(out) if out else np.zeros(0, np.float32)
-
-    return fn
+    """The decoder's SDF at a fixed shape and joint code, object-frame points (N, 3) -> (N,)."""
+    field_fn = decoder_field(decoder, code, joint, device=device)
+    return lambda points: field_fn(points)[0]
 
 
 def _query_points(decoder, code, joint, recon: Reconstruction, cfg: GraspExtractionConfig, device):
     """(points, sdf, raw outputs): the reconstruction's final level plus the seeded shell points (object frame)."""
     import trimesh
-
-    from centerart.inference.reconstruction import decoder_field
 
     if not cfg.shell_points or len(recon.mesh.faces) == 0:
         return recon.points, recon.sdf, recon.raw
