@@ -92,12 +92,18 @@ class Builder:
         self.joints: list[JointSpec] = []
         self.handles: list[HandleSpec] = []
         self.depth = 0.0
+        self.width = 0.0
+        self.height = 0.0
+        self.z_base = 0.0
+        # (kind, cell, hinge) of every front: door / drawer / panel; hinge is None but for doors. Later
+        # furnishing (shelves behind doors, displays on panels) reads it.
+        self.fronts: list[tuple[str, Cell, str | None]] = []
 
     # ------------------------------------------------------------- carcass
     def carcass(self, width: float, depth: float, height: float, z_base: float, color, material: str) -> None:
         """Five panels (back, sides, top, bottom) from z_base to height; a recessed plinth below z_base."""
         t, w2 = self.t, width / 2
-        self.depth = depth
+        self.depth, self.width, self.height, self.z_base = depth, width, height, z_base
         prims = [
             box_between([-depth, -w2, z_base], [-depth + t, w2, height]),  # back
             box_between([-depth, -w2, z_base], [0, -w2 + t, height]),  # left side
@@ -108,6 +114,24 @@ class Builder:
         if z_base > 0:
             prims.append(box_between([-depth + 0.02, -w2 + 0.02, 0.0], [-0.05, w2 - 0.02, z_base + EMBED]))
         self.base.append(VisualGroup("body", prims, rgba(color), material))
+
+    def feet(self, radius: float, height: float, color, material: str) -> None:
+        """Four cylindrical feet under the carcass corners (inset 4 cm). They replace the recessed plinth when the
+        carcass has one (from the floor to its bottom); otherwise they lift it: they hang ``height`` below z = 0,
+        which :meth:`finish` re-centres away."""
+        body = self.base[0]
+        if self.z_base > 0:
+            body.primitives.pop()  # the recessed plinth, last of the carcass primitives
+            z0, z1 = 0.0, self.z_base + EMBED
+        else:
+            z0, z1 = -height, EMBED
+        d, w2, inset = self.depth, self.width / 2, 0.04 + radius
+        prims = [
+            cylinder_along(2, [x, y, (z0 + z1) / 2], radius, z1 - z0)
+            for x in (-d + inset, -inset)
+            for y in (-w2 + inset, w2 - inset)
+        ]
+        self.base.append(VisualGroup(f"feet_{len(self.base)}", prims, rgba(color), material))
 
     def divider(self, horizontal: bool, at: float, lo: float, hi: float, color, material: str) -> None:
         """A shelf (horizontal, at height ``at``, spanning y in [lo, hi]) or a partition (vertical, at y)."""
@@ -140,6 +164,7 @@ class Builder:
             box_between([-self.t, cell.y0 + g / 2, cell.z0 + g / 2], [0.0, cell.y1 - g / 2, cell.z1 - g / 2]),
         ]
         self.base.append(VisualGroup(f"panel_{len(self.base)}", prims, rgba(color), material))
+        self.fronts.append(("panel", cell, None))
         if knobs:
             zc = (cell.z0 + cell.z1) / 2
             r = min(0.018, 0.3 * cell.height)
@@ -194,6 +219,7 @@ class Builder:
                 )
             )
         free_edge = {"left": "right", "right": "left", "bottom": "top", "top": "bottom"}[hinge]
+        self.fronts.append(("door", cell, hinge))
         self._handle(groups, handle, lo, hi, free_edge, strip[0] if strip else 0.0)
         return self._add_moving(f"door_{len(self.links)}", groups, origin, axis, "revolute", 0.0, upper, "door")
 
@@ -216,6 +242,7 @@ class Builder:
             VisualGroup("tray", tray, rgba(np.clip(np.asarray(color) * 0.85, 0, 1)), material),
         ]
         self._handle(groups, handle, lo, hi, "center", 0.0)
+        self.fronts.append(("drawer", cell, None))
         travel = travel_fraction * (g - back)
         origin = np.array([hi[0], (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2])
         return self._add_moving(

@@ -50,6 +50,11 @@ class GenerateObjectsConfig:
     """Global seed: object i of a category depends only on (seed, category, i)."""
     workers: int | None = None
     """Parallel worker processes (default: all cores)."""
+    variety: Literal["classic", "extended"] = "classic"
+    """Object variety: ``classic`` (the generator the shipped models were trained on) or ``extended`` (issue 15's
+    realism and size lever: real size ranges, side-by-side and French-door fridges, double and twin ovens,
+    shelves, racks, baskets, turntables, displays, cooktops, countertops and feet; see
+    :mod:`centerart.assets.furnishing`)."""
     skip_checks: bool = False
     """Write objects without the physics checks (faster; not for training data)."""
     ray_address: str | None = None
@@ -65,17 +70,21 @@ def object_id(category: str, index: int) -> str:
     return f"{category}_{index:04d}"
 
 
-def _generate_one(job: tuple[str, int, int, str, bool, str]) -> dict:
-    category, index, seed, out, skip_checks, version = job
+def _generate_one(job: tuple[str, int, int, str, str, bool, str]) -> dict:
+    category, index, seed, out, variety, skip_checks, version = job
     oid = object_id(category, index)
     final = Path(out) / oid
     if (final / "meta.json").is_file():
-        return {**_finished_record(final), "resumed": True}
+        record = _finished_record(final)
+        made = _made_variety(final)
+        if made != variety:
+            raise CenterArtError(f"{final}: a {made} object, not {variety}; generate the {variety} variety elsewhere")
+        return {**record, "resumed": True}
     started = time.perf_counter()
     rejections = []
     for attempt in range(MAX_ATTEMPTS):
         rng = item_rng(seed, category, index, attempt)
-        spec = generate_spec(category, rng)
+        spec = generate_spec(category, rng, variety)
         record = {
             "id": oid,
             "category": category,
@@ -125,6 +134,15 @@ def _finished_record(final: Path) -> dict:
     return record
 
 
+def _made_variety(final: Path) -> str:
+    """The variety a finished object was generated with (objects from before varieties existed are classic)."""
+    try:
+        params = json.loads((final / "meta.json").read_text()).get("params", {})
+    except (OSError, ValueError, AttributeError):
+        params = {}
+    return params.get("variety", "classic") if isinstance(params, dict) else "classic"
+
+
 class _Rejected(Exception):
     pass
 
@@ -145,7 +163,9 @@ def generate_objects(cfg: GenerateObjectsConfig) -> dict:
             raise CenterArtError(f"unknown category {c!r}; choose from {', '.join(CATEGORIES)} or all")
     out = output_folder(cfg.out)
     version = code_version()
-    jobs = [(c, i, cfg.seed, str(out), cfg.skip_checks, version) for c in categories for i in range(cfg.count)]
+    jobs = [
+        (c, i, cfg.seed, str(out), cfg.variety, cfg.skip_checks, version) for c in categories for i in range(cfg.count)
+    ]
     results = parallel_map(_generate_one, jobs, cfg.workers, desc="objects", ray_address=cfg.ray_address)
     records = sorted(results, key=lambda r: r["id"])
     written = merge_manifest(

@@ -26,6 +26,8 @@ class ObjectsStep:
     test_count: int = 4
     """Test objects per category, generated with ``--test-seed``: no model sees them; the evaluation runs on them."""
     category: Literal["microwave", "oven", "refrigerator", "dishwasher", "storage_furniture", "all"] = "all"
+    variety: Literal["classic", "extended"] = "classic"
+    """Object variety of training and test objects (``centerart objects generate --variety``)."""
 
 
 @dataclass

@@ -33,6 +33,9 @@ from centerart.utils.parallel import init_ray, launcher_rank
 RESOURCE_KEYS = frozenset(
     {"workers", "ray_address", "progress", "threads", "accelerator", "devices", "num_nodes", "strategy", "resume"}
 )
+#: Fields added to stage configs after recipe runs were recorded, with the value those runs implicitly used: a
+#: record without the field matches a plan that holds that value (older runs stay resumable).
+ADDED_FIELDS = {"variety": "classic"}
 FOLLOW_POLL_S = 5.0
 
 
@@ -168,6 +171,8 @@ def _differences(a: Any, b: Any, prefix: str = "") -> list[str]:
     if isinstance(a, dict) and isinstance(b, dict):
         out = []
         for k in sorted(set(a) | set(b)):
+            if k not in a and k in ADDED_FIELDS and b[k] == ADDED_FIELDS[k]:
+                continue
             out += _differences(a.get(k), b.get(k), f"{prefix}.{k}" if prefix else k)
         return out
     return [] if a == b else [f"{prefix}: {a!r} -> {b!r}"]

@@ -61,7 +61,8 @@ SCENE_SETS = (
 def plan_objects(cfg: RecipeConfig, p: Paths) -> dict[str, Any]:
     from centerart.assets.dataset import GenerateObjectsConfig
 
-    common = {"category": cfg.objects.category, "workers": cfg.workers, "ray_address": cfg.ray_address}
+    o = cfg.objects
+    common = {"category": o.category, "variety": o.variety, "workers": cfg.workers, "ray_address": cfg.ray_address}
     return {
         "objects": GenerateObjectsConfig(out=p.objects, count=cfg.objects.count, seed=cfg.seed, **common),
         "test_objects": GenerateObjectsConfig(
