@@ -29,7 +29,9 @@ from pathlib import Path
 import numpy as np
 
 
-def measure(objects: Path, shader: str, depth: str, scenes: int, views: int, spp: int, seed: int) -> dict:
+def measure(
+    objects: Path, shader: str, depth: str, scenes: int, views: int, spp: int, seed: int, ir_shading: str = "fast"
+) -> dict:
     from centerart.scenes.dataset import (
         GenerateScenesConfig,
         asset_index,
@@ -50,8 +52,9 @@ def measure(objects: Path, shader: str, depth: str, scenes: int, views: int, spp
         intrinsics="d415",
         shader=shader,
         rt_samples_per_pixel=spp,
+        ir_shading=ir_shading,
     )
-    renderer = SceneRenderer(shader, spp)
+    renderer = SceneRenderer(shader, spp, ir_shading)
     t_layout, cpu_build, cpu_render, wall_build, wall_render, n_images = 0.0, 0.0, 0.0, 0.0, 0.0, 0
     compile_s = None
     with tempfile.TemporaryDirectory() as tmp:
@@ -79,6 +82,7 @@ def measure(objects: Path, shader: str, depth: str, scenes: int, views: int, spp
         "shader": shader,
         "rt_samples_per_pixel": spp if shader == "rt" else None,
         "depth": depth,
+        "ir_shading": ir_shading if depth == "stereo" else None,
         "resolution": "640x480",
         "scenes": scenes,
         "views_per_scene": views,
@@ -105,9 +109,12 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     if args.shader is not None:
-        depths = ["stereo"] if args.shader == "rt" else ["stereo", "analytic", "true"]
+        variants = [("stereo", "fast")]
+        if args.shader == "default":
+            variants += [("stereo", "full"), ("analytic", "fast"), ("true", "fast")]
         results = [
-            measure(args.objects, args.shader, d, args.scenes, args.views, args.rt_spp, args.seed) for d in depths
+            measure(args.objects, args.shader, d, args.scenes, args.views, args.rt_spp, args.seed, ir)
+            for d, ir in variants
         ]
         print(json.dumps(results))
         return

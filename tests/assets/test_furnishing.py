@@ -9,7 +9,6 @@ import pytest
 from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
 from centerart.assets.generator import generate_spec
 from centerart.errors import CenterArtError
-from centerart.recipe.runner import _differences
 from centerart.utils.seeding import item_rng
 
 FURNITURE_GROUPS = {
@@ -62,11 +61,3 @@ def test_a_folder_of_one_variety_does_not_resume_the_other(tmp_path):
     with pytest.raises(CenterArtError, match=r"microwave_0000: a classic object, not extended"):
         cfg = GenerateObjectsConfig(out=out, category="microwave", count=1, variety="extended", workers=1)
         generate_objects(cfg)
-
-
-def test_recipe_records_from_before_the_variety_option_still_resume():
-    old = {"objects": {"count": 8, "seed": 0}}
-    assert _differences(old, {"objects": {"count": 8, "seed": 0, "variety": "classic"}}) == []
-    assert _differences(old, {"objects": {"count": 8, "seed": 0, "variety": "extended"}}) == [
-        "objects.variety: None -> 'extended'"
-    ]

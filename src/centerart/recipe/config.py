@@ -87,6 +87,9 @@ class ScenesStep:
     kitchen_views: int = 2
     single_views: int = 1
     save_ir: bool = False
+    ir_shading: Literal["fast", "full"] = "fast"
+    """Stereo IR pair: ``fast`` (shaded from geometry) or ``full`` (lit render; recipe runs recorded before this
+    option made their scenes so, and resume only with it)."""
 
 
 @dataclass

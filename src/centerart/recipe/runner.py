@@ -35,7 +35,7 @@ RESOURCE_KEYS = frozenset(
 )
 #: Fields added to stage configs after recipe runs were recorded, with the value those runs implicitly used: a
 #: record without the field matches a plan that holds that value (older runs stay resumable).
-ADDED_FIELDS = {"variety": "classic"}
+ADDED_FIELDS = {"variety": "classic", "ir_shading": "full"}
 FOLLOW_POLL_S = 5.0
 
 
@@ -171,9 +171,8 @@ def _differences(a: Any, b: Any, prefix: str = "") -> list[str]:
     if isinstance(a, dict) and isinstance(b, dict):
         out = []
         for k in sorted(set(a) | set(b)):
-            if k not in a and k in ADDED_FIELDS and b[k] == ADDED_FIELDS[k]:
-                continue
-            out += _differences(a.get(k), b.get(k), f"{prefix}.{k}" if prefix else k)
+            old = a[k] if k in a else ADDED_FIELDS.get(k)  # a record from before the field: its implicit value
+            out += _differences(old, b.get(k), f"{prefix}.{k}" if prefix else k)
         return out
     return [] if a == b else [f"{prefix}: {a!r} -> {b!r}"]
 

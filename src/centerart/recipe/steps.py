@@ -197,7 +197,8 @@ def plan_scenes(cfg: RecipeConfig, p: Paths) -> dict[str, Any]:
             objects=objects[ss.role], out=p.scenes(ss.name), layout=ss.layout, count=count,
             views_per_scene=s.kitchen_views if ss.layout == "kitchen" else s.single_views,
             seed=(cfg.test_seed if ss.role == "test" else cfg.seed) + ss.seed_offset, depth=s.depth,
-            intrinsics=s.intrinsics, save_ir=s.save_ir, workers=cfg.workers, ray_address=cfg.ray_address,
+            intrinsics=s.intrinsics, save_ir=s.save_ir, ir_shading=s.ir_shading, workers=cfg.workers,
+            ray_address=cfg.ray_address,
             decoder_checkpoint=p.decoder / "decoder.pt" if ss.role == "train" else None,
         )  # fmt: skip
     return planned

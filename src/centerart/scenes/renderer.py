@@ -70,7 +70,7 @@ class SceneRenderer:
     always rasterised because they must be exact and noise-free).
     """
 
-    def __init__(self, shader: str = "default", rt_samples_per_pixel: int = 4):
+    def __init__(self, shader: str = "default", rt_samples_per_pixel: int = 4, ir_shading: str = "fast"):
         try:
             import sapien
         except ImportError as err:  # pragma: no cover - sapien is a hard dependency
@@ -79,6 +79,9 @@ class SceneRenderer:
         if shader not in ("default", "rt"):
             raise CenterArtError(f"unknown shader {shader!r}; choose default or rt")
         self.shader = shader
+        if ir_shading not in ("fast", "full"):
+            raise CenterArtError(f"unknown IR shading {ir_shading!r}; choose fast or full")
+        self.ir_shading = ir_shading
         if shader == "rt":
             sapien.render.set_ray_tracing_samples_per_pixel(int(rt_samples_per_pixel))
             sapien.render.set_ray_tracing_path_depth(4)
@@ -90,6 +93,7 @@ class SceneRenderer:
         self._entity_to_link_id: np.ndarray = np.zeros(1, np.uint16)
         self._entity_to_instance: np.ndarray = np.zeros(1, np.uint8)
         self._pattern_key = None
+        self._pattern: np.ndarray | None = None
 
     # ------------------------------------------------------------------ building
     def build(self, description: SceneDescription, scene_dir: Path | None = None) -> list[ArticulatedObject]:
@@ -251,10 +255,23 @@ class SceneRenderer:
         self.cam_geo = camera("geometry", "") if self.shader == "rt" else self.cam_rgb
         st = desc.stereo
         # SAPIEN's y axis points left, so an offset to the right (OpenCV +x) is -y.
-        self.cam_ir_l = camera("ir_left", "", -st.left_offset_m)
-        self.cam_ir_r = camera("ir_right", "", -(st.left_offset_m + st.baseline_m))
+        ir_shader = "trivial" if self.ir_shading == "fast" else ""  # fast: unlit albedo + position, no shadow passes
+        self.cam_ir_l = camera("ir_left", ir_shader, -st.left_offset_m)
+        self.cam_ir_r = camera("ir_right", ir_shader, -(st.left_offset_m + st.baseline_m))
         from centerart.scenes.depth_noise import dot_pattern
 
+        key = (st.pattern_seed, st.pattern_dot_fraction)
+        if key != self._pattern_key:
+            self._pattern_key = key
+            self._pattern = dot_pattern(st.pattern_seed, dot_fraction=st.pattern_dot_fraction)
+        if self.ir_shading == "full":
+            self._add_projector(rig, st)
+        self.scene.add_entity(rig)
+        self.rig = rig
+
+    def _add_projector(self, rig, st) -> None:
+        """SAPIEN's textured spot light as the dot projector (``ir_shading="full"``: the IR pair is rendered lit)."""
+        sapien = self._sapien
         self.projector = sapien.render.RenderTexturedLightComponent()
         self.projector.color = [0.0, 0.0, 0.0]
         fov = np.deg2rad(st.projector_fov_deg)
@@ -263,12 +280,9 @@ class SceneRenderer:
         self.projector.shadow = True
         self.projector.shadow_near = 0.1
         self.projector.shadow_far = 10.0
-        pattern = dot_pattern(st.pattern_seed, dot_fraction=st.pattern_dot_fraction)
-        self.projector.texture = sapien.render.RenderTexture2D(pattern, "R8G8B8A8Unorm", srgb=False)
+        self.projector.texture = sapien.render.RenderTexture2D(self._pattern, "R8G8B8A8Unorm", srgb=False)
         self.projector.local_pose = sapien.Pose([0.0, -st.projector_offset_m, 0.0])
         rig.add_component(self.projector)
-        self.scene.add_entity(rig)
-        self.rig = rig
 
     # ------------------------------------------------------------------ rendering
     def set_view(self, index: int) -> np.ndarray:
@@ -291,19 +305,73 @@ class SceneRenderer:
         seg = self.cam_geo.get_picture("Segmentation")[..., 1].astype(np.int64)
         seg = np.where(seg < len(self._entity_to_instance), seg, 0)
         images = ViewImages(rgb, depth, self._entity_to_instance[seg], self._entity_to_link_id[seg])
-        if ir:
-            intensity = self.description.stereo.projector_intensity
-            self.projector.color = [intensity] * 3
-            scene.update_render()
-            self.cam_ir_l.take_picture()
-            self.cam_ir_r.take_picture()
-            images.ir_left = self.cam_ir_l.get_picture("Color")[..., :3].mean(-1)
-            images.ir_right = self.cam_ir_r.get_picture("Color")[..., :3].mean(-1)
-            for cam, attr in ((self.cam_ir_l, "ir_left_depth"), (self.cam_ir_r, "ir_right_depth")):
-                p = cam.get_picture("Position")
-                setattr(images, attr, np.where(p[..., 3] < 1.0, -p[..., 2], 0.0).astype(np.float32))
-            self.projector.color = [0.0, 0.0, 0.0]
+        if ir and self.ir_shading == "full":
+            self._render_ir_lit(images)
+        elif ir:
+            self._render_ir_fast(images, index)
         return images
+
+    def _render_ir_lit(self, images: ViewImages) -> None:
+        """Both IR cameras rendered by SAPIEN's lit pipeline with the projector switched on."""
+        self.projector.color = [self.description.stereo.projector_intensity] * 3
+        self.scene.update_render()
+        self.cam_ir_l.take_picture()
+        self.cam_ir_r.take_picture()
+        images.ir_left = self.cam_ir_l.get_picture("Color")[..., :3].mean(-1)
+        images.ir_right = self.cam_ir_r.get_picture("Color")[..., :3].mean(-1)
+        images.ir_left_depth, images.ir_right_depth = self._ir_depths()
+        self.projector.color = [0.0, 0.0, 0.0]
+
+    def _render_ir_fast(self, images: ViewImages, index: int) -> None:
+        """Both IR cameras rasterised unlit (albedo, depth) and shaded by :mod:`centerart.scenes.ir_synthesis`."""
+        from centerart.scenes.ir_synthesis import shade_ir
+
+        self.cam_ir_l.take_picture()
+        self.cam_ir_r.take_picture()
+        images.ir_left_depth, images.ir_right_depth = self._ir_depths()
+        lighting = self._ir_lighting(index)
+        st = self.description.stereo
+        for cam, depth, x, attr in (
+            (self.cam_ir_l, images.ir_left_depth, st.left_offset_m, "ir_left"),
+            (self.cam_ir_r, images.ir_right_depth, st.left_offset_m + st.baseline_m, "ir_right"),
+        ):
+            albedo = cam.get_picture("Color")[..., :3].mean(-1)
+            setattr(images, attr, shade_ir(albedo, depth, self.K, x, lighting))
+
+    def _ir_depths(self) -> tuple[np.ndarray, np.ndarray]:
+        """True depth seen by each IR camera. The lit pipeline marks background by position.w = 1 (its depth
+        buffer); the unlit ``trivial`` shader writes the homogeneous position (w = 1 on every hit) and leaves the
+        background at its clear value 0, so there a hit is z < 0 (OpenGL camera frame, looking along -z)."""
+        out = []
+        for cam in (self.cam_ir_l, self.cam_ir_r):
+            p = cam.get_picture("Position")
+            hit = p[..., 3] < 1.0 if self.ir_shading == "full" else p[..., 2] < 0.0
+            out.append(np.where(hit, -p[..., 2], 0.0).astype(np.float32))
+        return out[0], out[1]
+
+    def _ir_lighting(self, index: int):
+        """The scene's lights and the projector in camera ``index``'s OpenCV frame, grey (IR sees no colour)."""
+        from centerart.scenes.ir_synthesis import IrLighting
+
+        desc, st = self.description, self.description.stereo
+        camera_T_world = np.linalg.inv(desc.camera_pose(index))
+        rot, trans = camera_T_world[:3, :3], camera_T_world[:3, 3]
+        points, directions = [], []
+        for light in desc.lights:
+            grey = float(np.mean(light.color))
+            if light.kind == "directional":
+                directions.append((rot @ np.asarray(light.direction, float), grey))
+            else:  # point, and spot lights treated as points (the generated kitchens have none)
+                points.append((rot @ np.asarray(light.position, float) + trans, grey))
+        return IrLighting(
+            pattern=self._pattern[..., 0].astype(np.float32) / 255.0,
+            projector_x=st.projector_offset_m,
+            fov_deg=st.projector_fov_deg,
+            intensity=st.projector_intensity,
+            ambient=float(np.mean(desc.ambient)),
+            point_lights=points,
+            directional_lights=directions,
+        )
 
     def close(self) -> None:
         self.scene = None
