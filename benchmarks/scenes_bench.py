@@ -30,7 +30,15 @@ import numpy as np
 
 
 def measure(
-    objects: Path, shader: str, depth: str, scenes: int, views: int, spp: int, seed: int, ir_shading: str = "fast"
+    objects: Path,
+    shader: str,
+    depth: str,
+    scenes: int,
+    views: int,
+    spp: int,
+    seed: int,
+    ir_shading: str = "fast",
+    save_ir: bool = True,
 ) -> dict:
     from centerart.scenes.dataset import (
         GenerateScenesConfig,
@@ -68,7 +76,7 @@ def measure(
             c0, w0 = time.process_time(), time.perf_counter()
             renderer.build(scene, scene_dir)
             c1, w1 = time.process_time(), time.perf_counter()
-            render_scene_views(renderer, scene, objs, scene_dir, depth, seed, i)
+            render_scene_views(renderer, scene, objs, scene_dir, depth, seed, i, save_ir=save_ir)
             c2, w2 = time.process_time(), time.perf_counter()
             if i == 0:
                 compile_s = w2 - w0
@@ -83,6 +91,7 @@ def measure(
         "rt_samples_per_pixel": spp if shader == "rt" else None,
         "depth": depth,
         "ir_shading": ir_shading if depth == "stereo" else None,
+        "ir_pngs_written": save_ir and depth == "stereo",
         "resolution": "640x480",
         "scenes": scenes,
         "views_per_scene": views,
