@@ -230,6 +230,14 @@ def _refrigerator(rng, extended: bool):
     return b, target, {"width": W, "depth": D, "height": H, "layout": layout, "hinge": hinge}
 
 
+def _stacked_cells(b: Builder, W: float, H: float, plinth: float, split: float, body) -> tuple[Cell, Cell]:
+    """Lower and upper cell of a body divided by a shelf at height ``split`` (m); draws nothing."""
+    b.divider(True, split, -W / 2, W / 2, body, "metal")
+    lower = Cell(-W / 2, W / 2, plinth, split, frozenset({"left", "right", "bottom"}))
+    upper = Cell(-W / 2, W / 2, split, H, frozenset({"left", "right", "top"}))
+    return lower, upper
+
+
 def _fridge_handle(b: Builder) -> dict:
     return b.sample_handle(("bar", "u", "lip"), (0.6, 0.2, 0.2), long_bar=True)
 
@@ -241,10 +249,7 @@ def _fridge_single(b: Builder, rng, W, H, plinth, hinge, body) -> list[str]:
 
 
 def _fridge_top_freezer(b: Builder, rng, W, H, plinth, hinge, body) -> list[str]:
-    split = H - u(rng, 0.25, 0.35) * (H - plinth)
-    b.divider(True, split, -W / 2, W / 2, body, "metal")
-    main = Cell(-W / 2, W / 2, plinth, split, frozenset({"left", "right", "bottom"}))
-    top = Cell(-W / 2, W / 2, split, H, frozenset({"left", "right", "top"}))
+    main, top = _stacked_cells(b, W, H, plinth, H - u(rng, 0.25, 0.35) * (H - plinth), body)
     h = _fridge_handle(b)
     return [
         b.door(main, hinge, u(rng, 1.7, 2.2), body, "metal", {**h, "along": u(rng, 0.6, 0.8)}),
@@ -255,10 +260,7 @@ def _fridge_top_freezer(b: Builder, rng, W, H, plinth, hinge, body) -> list[str]
 
 
 def _fridge_bottom_freezer(b: Builder, rng, W, H, plinth, hinge, body) -> list[str]:
-    split = plinth + u(rng, 0.28, 0.38) * (H - plinth)
-    b.divider(True, split, -W / 2, W / 2, body, "metal")
-    main = Cell(-W / 2, W / 2, split, H, frozenset({"left", "right", "top"}))
-    bottom = Cell(-W / 2, W / 2, plinth, split, frozenset({"left", "right", "bottom"}))
+    bottom, main = _stacked_cells(b, W, H, plinth, plinth + u(rng, 0.28, 0.38) * (H - plinth), body)
     h = _fridge_handle(b)
     return [
         b.door(main, hinge, u(rng, 1.7, 2.2), body, "metal", {**h, "along": u(rng, 0.25, 0.45)}),
@@ -279,11 +281,10 @@ def _fridge_side_by_side(b: Builder, rng, W, H, plinth, hinge, body) -> list[str
 def _fridge_french(b: Builder, rng, W, H, plinth, hinge, body) -> list[str]:
     """Two doors hinged outside over a freezer drawer (28-35 % of the height)."""
     split = plinth + u(rng, 0.28, 0.35) * (H - plinth)
-    b.divider(True, split, -W / 2, W / 2, body, "metal")
+    bottom, _ = _stacked_cells(b, W, H, plinth, split, body)
     b.divider(False, 0.0, split, H, body, "metal")
     left = Cell(-W / 2, 0.0, split, H, frozenset({"left", "top"}))
     right = Cell(0.0, W / 2, split, H, frozenset({"right", "top"}))
-    bottom = Cell(-W / 2, W / 2, plinth, split, frozenset({"left", "right", "bottom"}))
     h = _fridge_handle(b)
     upper, door_h = u(rng, 1.7, 2.2), {**h, "along": u(rng, 0.3, 0.5)}
     return [
