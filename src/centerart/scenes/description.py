@@ -15,6 +15,8 @@ coordinates (OpenCV convention). ``world_T_box`` is the centre of a box whose ha
 
 from __future__ import annotations
 
+import copy
+import functools
 import json
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
@@ -252,14 +254,30 @@ def load_object_in_default_frame(
     states, so an opened non-target drawer would shift the object's origin. Pinning the frame keeps poses of the same
     asset comparable across scenes (and with the decoder's object frame).
     """
-    from centerart.assets.articulated_object import ArticulatedObject
-
-    obj = ArticulatedObject.load(path, target_joint=target_joint, scale=scale)
+    obj = cached_object(path, target_joint, scale)
     if held_states and any(abs(obj.held_states[k] - v) > 0 for k, v in held_states.items() if k in obj.held_states):
         frame = obj.canonical_T_base
-        obj = ArticulatedObject.load(path, target_joint=target_joint, scale=scale, held_states=held_states)
+        obj = cached_object(path, target_joint, scale, held_states)
         obj.canonical_T_base = frame
     return obj
+
+
+def cached_object(path: str | Path, target_joint: str | None = None, scale: float | None = None, held_states=None):
+    """``ArticulatedObject.load``, memoised per process: scene generation loads every asset several times for each
+    scene it appears in (state sampling, swept bounds, collision check, rendering, labels), which was half of a
+    kitchen's layout time. Returns a shallow copy, so a caller may rebind its fields (``canonical_T_base``); the
+    key holds the URDF's and meta.json's modification times, so an object rewritten on disk is loaded again."""
+    folder = Path(path).parent if Path(path).suffix == ".urdf" else Path(path)
+    stamps = tuple(f.stat().st_mtime_ns if f.is_file() else 0 for f in (folder / "mobility.urdf", folder / "meta.json"))
+    held = tuple(sorted((held_states or {}).items()))
+    return copy.copy(_load_object(str(folder.resolve()), stamps, target_joint, scale, held))
+
+
+@functools.lru_cache(maxsize=32)
+def _load_object(folder: str, stamps: tuple, target_joint: str | None, scale: float | None, held: tuple):
+    from centerart.assets.articulated_object import ArticulatedObject
+
+    return ArticulatedObject.load(folder, target_joint=target_joint, scale=scale, held_states=dict(held) or None)
 
 
 def load_scene_object(spec: ObjectSpec):

@@ -31,6 +31,7 @@ from centerart.scenes.description import (
     ObjectSpec,
     SceneDescription,
     StereoSpec,
+    cached_object,
     load_object_in_default_frame,
     pose_list,
 )
@@ -228,7 +229,7 @@ class _Placed:
 
 
 def _load(entry: AssetEntry, rng) -> tuple[ArticulatedObject, float, dict[str, float]]:
-    obj = ArticulatedObject.load(entry.path)
+    obj = cached_object(entry.path)
     q, held = sample_states(obj, rng)
     return load_object_in_default_frame(entry.path, obj.target_joint, obj.scale, held), q, held
 
