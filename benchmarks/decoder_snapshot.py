@@ -1,0 +1,58 @@
+"""Export a decoder training run's Lightning checkpoint (an intermediate epoch) as a ``decoder.pt`` checkpoint, so
+two runs can be compared at the same number of optimizer steps before either finishes (issue 15's levers).
+
+    PYTHONPATH=src python benchmarks/decoder_snapshot.py --run runs/small/decoder \
+        --ckpt runs/small/decoder/lightning/epoch=49-step=1600.ckpt --out snapshots/classic_e49.pt
+
+The run's ``config.json`` rebuilds the module and its data split (the SDF samples must still be where it names);
+the result loads with ``centerart.models.checkpoint.load_decoder`` like a finished run's export. Prints one JSON line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+from pathlib import Path
+
+import torch
+
+
+def main() -> None:
+    from centerart.models.checkpoint import save_checkpoint
+    from centerart.training.decoder_module import DecoderModule
+    from centerart.training.train_decoder import (
+        CodeFitConfig,
+        TrainDecoderConfig,
+        _load_data,
+        training_object_fingerprints,
+    )
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--run", type=Path, required=True, help="the training run's output folder")
+    parser.add_argument("--ckpt", type=Path, required=True, help="a Lightning checkpoint of that run")
+    parser.add_argument("--out", type=Path, required=True)
+    args = parser.parse_args()
+    saved = json.loads((args.run / "config.json").read_text())
+    names = {f.name for f in dataclasses.fields(TrainDecoderConfig)}
+    cfg = TrainDecoderConfig(**{k: v for k, v in saved.items() if k in names})
+    cfg = dataclasses.replace(cfg, data=Path(cfg.data), out=Path(cfg.out), progress=False)
+    data = _load_data(cfg)
+    module = DecoderModule(
+        cfg.decoder_config(), cfg.loss_config(), data.split.train_objects, cfg.lr_decoder, cfg.lr_codes, cfg.epochs,
+        heldout_object_states=data.heldout_objects, code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, seed=cfg.seed),
+    )  # fmt: skip
+    blob = torch.load(args.ckpt, map_location="cpu", weights_only=False)  # our own training output
+    module.load_state_dict(blob["state_dict"])
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    train_config = json.loads(json.dumps({**dataclasses.asdict(cfg), "snapshot_of": str(args.ckpt)}, default=str))
+    save_checkpoint(
+        args.out, module.decoder.cpu(), data.split.train_objects, module.code_array(), data.bounds,
+        data.split.to_dict(), train_config, {"epoch": blob.get("epoch"), "global_step": blob.get("global_step")},
+        training_objects=training_object_fingerprints(Path(cfg.data), data.split.train_objects),
+    )  # fmt: skip
+    print(json.dumps({"out": str(args.out), "epoch": blob.get("epoch"), "global_step": blob.get("global_step")}))
+
+
+if __name__ == "__main__":
+    main()
