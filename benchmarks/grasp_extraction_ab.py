@@ -58,7 +58,7 @@ def fitted_codes(loaded, sdf: Path, steps: int = 200, seed: int = 0) -> dict[str
     return {oid: fitted_code(loaded.decoder, states, steps, seed) for oid, states in sorted(by_object.items())}
 
 
-def summarize(rows: list[dict]) -> dict:
+def summarize(rows: list[dict], settings=tuple(SETTINGS)) -> dict:
     """Per setting and state kind: top-1, any of 5, states without a grasp; and the shape (Chamfer-L1 mm mean and
     median over finite values, F-score@1cm) per state kind."""
     out = {"shape": {}}
@@ -71,7 +71,7 @@ def summarize(rows: list[dict]) -> dict:
             "fscore": float(np.mean(fs)) if fs else None,
             "empty_meshes": len(fs) - len(cd),
         }
-    for name in SETTINGS:
+    for name in settings:
         out[name] = {}
         for kind in STATES:
             rs = [r[name] for r in rows if r["state"] == kind]
@@ -93,8 +93,10 @@ def main() -> None:
     ap.add_argument("--checkpoint", type=Path, default=None, help="decoder (default: the shipped one)")
     ap.add_argument("--objects-per-category", default="0:8")
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--settings", default="before,shell,default", help="comma-separated extraction settings")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
+    settings = {name: SETTINGS[name] for name in args.settings.split(",")}
     torch.set_num_threads(args.threads)
     loaded = load_decoder(args.checkpoint)
     if args.fit_codes_from is not None:
@@ -110,14 +112,14 @@ def main() -> None:
             recon = reconstruct_object(loaded.decoder, code, u, loaded.bounds, MeshConfig(resolution=128))
             chamfer, fscore = chamfer_fscore(recon.mesh, obj.watertight_mesh(q))
             row = {"object_id": oid, "state": kind, "chamfer_mm": chamfer, "fscore": fscore}
-            for name, cfg in SETTINGS.items():
+            for name, cfg in settings.items():
                 t0 = time.perf_counter()
                 g = extract_grasps(loaded.decoder, code, u, recon, cfg)
                 seconds = time.perf_counter() - t0
                 row[name] = {"count": len(g), "ok": execute_grasps(obj, q, g.poses, 5), "seconds": seconds}
             rows.append(row)
     report = {"checkpoint": str(loaded.path), "objects": str(objects), "fitted_codes": args.fit_codes_from is not None,
-              "summary": summarize(rows), "states": rows}  # fmt: skip
+              "summary": summarize(rows, tuple(settings)), "states": rows}  # fmt: skip
     emit(report, args.out)
 
 
