@@ -75,8 +75,7 @@ def _generate_one(job: tuple[str, int, int, str, str, bool, str]) -> dict:
     oid = object_id(category, index)
     final = Path(out) / oid
     if (final / "meta.json").is_file():
-        record = _finished_record(final)
-        made = _made_variety(final)
+        record, made = _finished_record(final)
         if made != variety:
             raise CenterArtError(f"{final}: a {made} object, not {variety}; generate the {variety} variety elsewhere")
         return {**record, "resumed": True}
@@ -120,27 +119,21 @@ def _generate_one(job: tuple[str, int, int, str, str, bool, str]) -> dict:
 RECORD_SCHEMA = {"id": str, "category": str, "joint_type": str, "rejected": list, "triangles": int}
 
 
-def _finished_record(final: Path) -> dict:
-    """The manifest row of an object an earlier run finished; one clear error when its meta.json is damaged."""
+def _finished_record(final: Path) -> tuple[dict, str]:
+    """The manifest row of an object an earlier run finished and the variety it was generated with (objects from
+    before varieties existed are classic); one clear error when its meta.json is damaged."""
     meta_path = final / "meta.json"
     try:
-        record = json.loads(meta_path.read_text())["generator"]["record"]
+        meta = json.loads(meta_path.read_text())
+        record = meta["generator"]["record"]
     except (OSError, ValueError, KeyError, TypeError) as err:
-        record, problem = None, f"no generator.record ({type(err).__name__})"
+        meta, record, problem = {}, None, f"no generator.record ({type(err).__name__})"
     else:
         problem = json_problem(record, RECORD_SCHEMA, "generator.record")
     if problem:
         raise CenterArtError(f"{meta_path}: damaged ({problem}); delete {final} to generate it again")
-    return record
-
-
-def _made_variety(final: Path) -> str:
-    """The variety a finished object was generated with (objects from before varieties existed are classic)."""
-    try:
-        params = json.loads((final / "meta.json").read_text()).get("params", {})
-    except (OSError, ValueError, AttributeError):
-        params = {}
-    return params.get("variety", "classic") if isinstance(params, dict) else "classic"
+    params = meta.get("params")
+    return record, params.get("variety", "classic") if isinstance(params, dict) else "classic"
 
 
 class _Rejected(Exception):

@@ -148,7 +148,8 @@ def _oven(rng, extended: bool):
     return b, target, {**params, **({"layout": layout} if extended else {}), **extra}
 
 
-def _control_strip(b: Builder, rng, W: float, H: float, strip: float) -> None:
+def _control_strip(b: Builder, rng, W: float, H: float, strip: float, body) -> None:
+    """The oven's control strip with knobs along the top, over a shelf that closes the cavity below it."""
     b.fixed_panel(
         Cell(-W / 2, W / 2, H - strip, H, frozenset({"left", "right", "top"})),
         pick(rng, "plastic"),
@@ -156,6 +157,7 @@ def _control_strip(b: Builder, rng, W: float, H: float, strip: float) -> None:
         knobs=int(rng.integers(3, 6)),
         knob_color=pick(rng, "metal"),
     )
+    b.divider(True, H - strip, -W / 2, W / 2, body, "metal")
 
 
 def _oven_single(b: Builder, rng, W: float, H: float, plinth: float, strip: float, body) -> tuple[str, dict]:
@@ -163,8 +165,7 @@ def _oven_single(b: Builder, rng, W: float, H: float, plinth: float, strip: floa
     has_drawer = rng.random() < 0.5
     drawer_h = u(rng, 0.12, 0.17) if has_drawer else 0.0
     z_door0 = plinth + drawer_h
-    _control_strip(b, rng, W, H, strip)
-    b.divider(True, H - strip, -W / 2, W / 2, body, "metal")
+    _control_strip(b, rng, W, H, strip, body)
     handle = b.sample_handle(("bar", "u"), (0.85, 0.15))
     outer = frozenset({"left", "right"} | ({"bottom"} if not has_drawer else set()))
     target = b.door(
@@ -191,8 +192,7 @@ def _oven_single(b: Builder, rng, W: float, H: float, plinth: float, strip: floa
 def _oven_pair(b: Builder, rng, W: float, H: float, plinth: float, strip: float, body, stacked: bool):
     """Two oven cavities with bottom-hinged doors under the control strip: stacked (a wall oven) or side by side
     (a wide range, the left one 50-62 % of the width); the target is either door."""
-    _control_strip(b, rng, W, H, strip)
-    b.divider(True, H - strip, -W / 2, W / 2, body, "metal")
+    _control_strip(b, rng, W, H, strip, body)
     handle = b.sample_handle(("bar", "u"), (0.85, 0.15))
     window = u(rng, 0.06, 0.1)
     if stacked:

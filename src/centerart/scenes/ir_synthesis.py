@@ -91,6 +91,8 @@ def shade_ir(albedo: np.ndarray, depth: np.ndarray, K: np.ndarray, camera_x: flo
     h, w = depth.shape
     z = depth.astype(np.float32)
     hit = z > 0
+    # The pinhole back-projection of geometry.camera.depth_to_point_map, kept as float32 per-axis arrays without
+    # NaN holes: this function runs twice per stereo image and the (H, W, 3) float64 map tripled its time.
     x = (np.arange(w, dtype=np.float32)[None, :] - np.float32(K[0, 2])) / np.float32(K[0, 0]) * z
     y = (np.arange(h, dtype=np.float32)[:, None] - np.float32(K[1, 2])) / np.float32(K[1, 1]) * z
     normals = surface_normals(x, y, z)

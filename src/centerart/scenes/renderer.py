@@ -25,6 +25,7 @@ import trimesh
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.errors import CenterArtError
 from centerart.geometry.camera import OPENCV_T_SAPIEN, Intrinsics
+from centerart.geometry.transforms import apply_transform
 from centerart.scenes.description import MaterialSpec, SceneDescription, load_scene_object
 from centerart.scenes.textures import make_texture
 
@@ -93,7 +94,8 @@ class SceneRenderer:
         self._entity_to_link_id: np.ndarray = np.zeros(1, np.uint16)
         self._entity_to_instance: np.ndarray = np.zeros(1, np.uint8)
         self._pattern_key = None
-        self._pattern: np.ndarray | None = None
+        self._pattern: np.ndarray | None = None  # (H, W, 4) uint8 RGBA, the projector's texture
+        self._pattern_grey: np.ndarray | None = None  # (H, W) float32 in 0..1, what fast IR shading samples
 
     # ------------------------------------------------------------------ building
     def build(self, description: SceneDescription, scene_dir: Path | None = None) -> list[ArticulatedObject]:
@@ -264,6 +266,7 @@ class SceneRenderer:
         if key != self._pattern_key:
             self._pattern_key = key
             self._pattern = dot_pattern(st.pattern_seed, dot_fraction=st.pattern_dot_fraction)
+            self._pattern_grey = self._pattern[..., 0].astype(np.float32) / 255.0
         if self.ir_shading == "full":
             self._add_projector(rig, st)
         self.scene.add_entity(rig)
@@ -355,16 +358,15 @@ class SceneRenderer:
 
         desc, st = self.description, self.description.stereo
         camera_T_world = np.linalg.inv(desc.camera_pose(index))
-        rot, trans = camera_T_world[:3, :3], camera_T_world[:3, 3]
         points, directions = [], []
         for light in desc.lights:
             grey = float(np.mean(light.color))
             if light.kind == "directional":
-                directions.append((rot @ np.asarray(light.direction, float), grey))
+                directions.append((camera_T_world[:3, :3] @ np.asarray(light.direction, float), grey))
             else:  # point, and spot lights treated as points (the generated kitchens have none)
-                points.append((rot @ np.asarray(light.position, float) + trans, grey))
+                points.append((apply_transform(camera_T_world, light.position), grey))
         return IrLighting(
-            pattern=self._pattern[..., 0].astype(np.float32) / 255.0,
+            pattern=self._pattern_grey,
             projector_x=st.projector_offset_m,
             fov_deg=st.projector_fov_deg,
             intensity=st.projector_intensity,
