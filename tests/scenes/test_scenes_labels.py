@@ -129,3 +129,23 @@ def test_silhouette_projection_rejects_wrong_frame(single_dataset):
     sil = project_silhouette(objects[0].mesh(scene.objects[0].joint_state), T, np.asarray(view.labels["K"]), w, h)
     mask = view.instances == lab["instance"]
     assert (sil & mask).sum() / (sil | mask).sum() < 0.9
+
+
+def test_heatmap_outside_its_window_is_below_the_floor():
+    """The Gaussians are evaluated in a window only: the full-image evaluation differs from it by less than the
+    floor everywhere, so the stored 16-bit heatmap (65535 steps) is the same. A tilted, elongated mask near a
+    border and a small one exercise the covariance and the clipping."""
+    from centerart.scenes.labels import HEATMAP_FLOOR
+
+    h, w = 120, 160
+    vv, uu = np.mgrid[0:h, 0:w]
+    tilted = np.abs((uu - 30) - 0.8 * (vv - 20)) < 6
+    small = (uu - 120) ** 2 + (vv - 90) ** 2 < 16
+    heat, stats = heatmap_from_masks([tilted, small])
+    full = np.zeros((h, w))
+    for st in stats:
+        mean, inv = np.asarray(st["mean_uv"]), np.linalg.inv(np.asarray(st["cov_uv"]))
+        d = np.stack([uu - mean[0], vv - mean[1]], -1)
+        full = np.maximum(full, np.exp(-0.5 * np.einsum("...i,ij,...j->...", d, inv, d)))
+    assert np.abs(full - heat).max() < HEATMAP_FLOOR
+    assert np.array_equal(np.round(full.astype(np.float32) * 65535), np.round(heat * 65535))

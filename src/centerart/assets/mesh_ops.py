@@ -10,10 +10,15 @@ from skimage.measure import marching_cubes
 
 
 def to_manifold(mesh: trimesh.Trimesh) -> manifold3d.Manifold:
+    return manifold_from_arrays(mesh.vertices, mesh.faces)
+
+
+def manifold_from_arrays(vertices: np.ndarray, faces: np.ndarray) -> manifold3d.Manifold:
+    """A manifold3d solid from (V, 3) vertices and (F, 3) triangle indices of a closed mesh."""
     m = manifold3d.Manifold(
         manifold3d.Mesh(
-            vert_properties=np.asarray(mesh.vertices, dtype=np.float32),
-            tri_verts=np.asarray(mesh.faces, dtype=np.uint32),
+            vert_properties=np.asarray(vertices, dtype=np.float32),
+            tri_verts=np.asarray(faces, dtype=np.uint32),
         )
     )
     if m.status() != manifold3d.Error.NoError:

@@ -199,7 +199,7 @@ def render_scene_views(
     from centerart.scenes.depth_noise import analytic_depth, stereo_depth, stereo_occlusion, to_ir_uint8
     from centerart.scenes.labels import view_labels
 
-    summaries = []
+    summaries, meshes = [], {}
     K = np.asarray(scene.cameras[0].K, float)
     for v in range(len(scene.cameras)):
         rng = item_rng(seed, "scene", index, "view", v, "sensor")
@@ -224,7 +224,7 @@ def render_scene_views(
             _write_png(view_dir / "depth_realistic.png", depth_to_png(realistic))
         _write_png(view_dir / "instances.png", images.instances)
         _write_png(view_dir / "links.png", images.links)
-        info, heat = view_labels(scene, objects, v, images.instances, renderer.link_ids, shape_codes)
+        info, heat = view_labels(scene, objects, v, images.instances, renderer.link_ids, shape_codes, meshes)
         _write_png(view_dir / "heatmap.png", np.round(heat * HEATMAP_SCALE).astype(np.uint16))
         info["depth_realistic"] = depth_mode if realistic is not None else None
         atomic_write_json(view_dir / "labels.json", info)

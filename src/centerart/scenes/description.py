@@ -256,10 +256,13 @@ def load_object_in_default_frame(
     """
     obj = cached_object(path, target_joint, scale)
     if held_states and any(abs(obj.held_states[k] - v) > 0 for k, v in held_states.items() if k in obj.held_states):
-        frame = obj.canonical_T_base
-        obj = cached_object(path, target_joint, scale, held_states)
-        obj.canonical_T_base = frame
+        obj = obj.with_held_states(held_states)
     return obj
+
+
+#: Assets memoised per process (a generated object holds about 3 MB of meshes, so at most ~200 MB per worker): the
+#: small recipe's 41 objects fit; a cache of 32 kept evicting them.
+OBJECT_CACHE_SIZE = 64
 
 
 def cached_object(path: str | Path, target_joint: str | None = None, scale: float | None = None, held_states=None):
@@ -273,7 +276,7 @@ def cached_object(path: str | Path, target_joint: str | None = None, scale: floa
     return copy.copy(_load_object(str(folder.resolve()), stamps, target_joint, scale, held))
 
 
-@functools.lru_cache(maxsize=32)
+@functools.lru_cache(maxsize=OBJECT_CACHE_SIZE)
 def _load_object(folder: str, stamps: tuple, target_joint: str | None, scale: float | None, held: tuple):
     from centerart.assets.articulated_object import ArticulatedObject
 
