@@ -13,6 +13,13 @@ Usage::
 
 Without ``--shader`` both variants run (the ray-tracing one in a child process, because SAPIEN's shader choice is
 process-wide). Prints one JSON document.
+
+``--whole-step`` measures what a scenes-step worker does per scene instead (``scenes.dataset._generate_one``: layout
+and collision check, textures, build, render, PNGs, labels, atomic write), stereo depth without IR PNGs (the
+recipe's setting), kitchens (2 views) and single-object scenes (1 view), with Mesa's threads off as in parallel
+workers::
+
+    PYTHONPATH=src python benchmarks/scenes_bench.py --objects /tmp/objects --whole-step --scenes 8
 """
 
 from __future__ import annotations
@@ -108,6 +115,30 @@ def measure(
     }
 
 
+def measure_whole_step(objects: Path, layout: str, scenes: int, seed: int) -> dict:
+    """Images per CPU-second of ``_generate_one`` over scenes 1..N; scene 0 first compiles the shaders."""
+    from dataclasses import asdict
+
+    from centerart.scenes.dataset import GenerateScenesConfig, _generate_one, asset_index
+
+    os.environ["LP_NUM_THREADS"] = "0"  # as parallel workers set it (scenes.dataset._generate_one)
+    entries = asset_index(objects)
+    views = 2 if layout == "kitchen" else 1
+    with tempfile.TemporaryDirectory() as tmp:
+        cfg = GenerateScenesConfig(
+            objects=objects, out=Path(tmp), layout=layout, views_per_scene=views, seed=seed, depth="stereo",
+            intrinsics="d415", workers=2, save_ir=False,
+        )  # fmt: skip
+        job = asdict(cfg)
+        _generate_one((job, 0, entries))
+        c0 = time.process_time()
+        for i in range(1, scenes + 1):
+            _generate_one((job, i, entries))
+        cpu = time.process_time() - c0
+    return {"layout": layout, "views_per_scene": views, "images": scenes * views,
+            "images_per_cpu_second": round(scenes * views / cpu, 3)}  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--objects", type=Path, required=True)
@@ -116,7 +147,13 @@ def main() -> None:
     parser.add_argument("--shader", choices=["default", "rt"], default=None)
     parser.add_argument("--rt-spp", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--whole-step", action="store_true", help="time the scenes step's per-scene work instead")
     args = parser.parse_args()
+    if args.whole_step:
+        print(
+            json.dumps([measure_whole_step(args.objects, lay, args.scenes, args.seed) for lay in ("kitchen", "single")])
+        )
+        return
     if args.shader is not None:
         variants = [("stereo", "fast")]
         if args.shader == "default":
