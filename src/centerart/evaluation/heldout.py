@@ -3,8 +3,9 @@
 A checkpoint lists its training objects (``training_objects``: id -> fingerprint, written by the training
 commands). Checkpoints made before fingerprints were recorded list ids only, and those made before the current
 fingerprint scheme (``assets.fingerprint.is_current``) list fingerprints that change with the code version; for
-the shipped ones, ``weights/training_objects.json`` holds current fingerprints, keyed by the checkpoint file's
-sha256 (so it applies to those exact files and nothing else), and takes precedence over such a record. A
+such files a table ``weights/training_objects.json`` (none is shipped today: the shipped checkpoints record current
+fingerprints) may hold current fingerprints, keyed by the checkpoint file's sha256 (so it applies to those exact
+files and nothing else), and takes precedence over such a record. A
 checkpoint known by ids only refuses every test object with one of those ids, because an id alone cannot prove
 two objects differ.
 """
