@@ -265,22 +265,22 @@ def load_object_in_default_frame(
 OBJECT_CACHE_SIZE = 64
 
 
-def cached_object(path: str | Path, target_joint: str | None = None, scale: float | None = None, held_states=None):
+def cached_object(path: str | Path, target_joint: str | None = None, scale: float | None = None):
     """``ArticulatedObject.load``, memoised per process: scene generation loads every asset several times for each
     scene it appears in (state sampling, swept bounds, collision check, rendering, labels), which was half of a
     kitchen's layout time. Returns a shallow copy, so a caller may rebind its fields (``canonical_T_base``); the
-    key holds the URDF's and meta.json's modification times, so an object rewritten on disk is loaded again."""
+    key holds the URDF's and meta.json's modification times, so an object rewritten on disk is loaded again. Held
+    joints are applied to the cached object (``ArticulatedObject.with_held_states``), not loaded again."""
     folder = Path(path).parent if Path(path).suffix == ".urdf" else Path(path)
     stamps = tuple(f.stat().st_mtime_ns if f.is_file() else 0 for f in (folder / "mobility.urdf", folder / "meta.json"))
-    held = tuple(sorted((held_states or {}).items()))
-    return copy.copy(_load_object(str(folder.resolve()), stamps, target_joint, scale, held))
+    return copy.copy(_load_object(str(folder.resolve()), stamps, target_joint, scale))
 
 
 @functools.lru_cache(maxsize=OBJECT_CACHE_SIZE)
-def _load_object(folder: str, stamps: tuple, target_joint: str | None, scale: float | None, held: tuple):
+def _load_object(folder: str, stamps: tuple, target_joint: str | None, scale: float | None):
     from centerart.assets.articulated_object import ArticulatedObject
 
-    return ArticulatedObject.load(folder, target_joint=target_joint, scale=scale, held_states=dict(held) or None)
+    return ArticulatedObject.load(folder, target_joint=target_joint, scale=scale)
 
 
 def load_scene_object(spec: ObjectSpec):
