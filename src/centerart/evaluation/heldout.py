@@ -2,17 +2,13 @@
 
 A checkpoint lists its training objects (``training_objects``: id -> fingerprint, written by the training
 commands). Checkpoints made before fingerprints were recorded list ids only, and those made before the current
-fingerprint scheme (``assets.fingerprint.is_current``) list fingerprints that change with the code version; for
-such files a table ``weights/training_objects.json`` (none is shipped today: the shipped checkpoints record current
-fingerprints) may hold current fingerprints, keyed by the checkpoint file's sha256 (so it applies to those exact
-files and nothing else), and takes precedence over such a record. A
-checkpoint known by ids only refuses every test object with one of those ids, because an id alone cannot prove
-two objects differ.
+fingerprint scheme (``assets.fingerprint.is_current``) list fingerprints that change with the code version, so
+such a record counts as ids only (the shipped checkpoints record current fingerprints). A checkpoint known by ids
+only refuses every test object with one of those ids, because an id alone cannot prove two objects differ.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,13 +16,9 @@ from centerart.assets.fingerprint import is_current
 from centerart.errors import CenterArtError
 from centerart.models.checkpoint import FORMAT as DECODER_FORMAT
 from centerart.models.checkpoint import VERSION as DECODER_VERSION
-from centerart.models.checkpoint import WEIGHTS_DIR
 from centerart.models.checkpoint_files import read_blob
 from centerart.models.encoder.checkpoint import FORMAT as ENCODER_FORMAT
 from centerart.models.encoder.checkpoint import VERSION as ENCODER_VERSION
-from centerart.models.encoder.checkpoint import file_sha256
-
-SHIPPED_TRAINING_OBJECTS = WEIGHTS_DIR / "training_objects.json"
 
 
 @dataclass
@@ -47,7 +39,7 @@ def checkpoint_training_objects(path: Path, kind: str) -> TrainingObjects:
     ids = list(blob["object_ids"] if kind == "decoder" else (blob.get("decoder") or {}).get("object_ids", []))
     recorded = dict(blob.get("training_objects") or {})
     if not recorded or any(fp and not is_current(fp) for fp in recorded.values()):
-        recorded = _shipped(path) or {oid: None for oid in recorded}  # outdated fingerprints prove nothing
+        recorded = {oid: None for oid in recorded}  # outdated fingerprints prove nothing
     fingerprints = {fp: oid.split("@")[0] for oid, fp in recorded.items() if fp}
     ids_only = {oid.split("@")[0] for oid, fp in recorded.items() if not fp}
     if not recorded:
@@ -56,13 +48,6 @@ def checkpoint_training_objects(path: Path, kind: str) -> TrainingObjects:
         # checkpoint vouches for them by fingerprint.)
         ids_only |= set(ids)
     return TrainingObjects(path, fingerprints, ids_only)
-
-
-def _shipped(path: Path) -> dict[str, str | None]:
-    if not SHIPPED_TRAINING_OBJECTS.is_file():
-        return {}
-    table = json.loads(SHIPPED_TRAINING_OBJECTS.read_text())
-    return dict((table.get(file_sha256(path)) or {}).get("objects") or {})
 
 
 def training_overlap(test_objects: dict[str, str], trained: list[TrainingObjects]) -> list[str]:
