@@ -262,16 +262,20 @@ class ArticulatedObject:
         return JointAxis(joint_frame[:3, 3].copy(), direction / np.linalg.norm(direction), j.type)
 
     # ------------------------------------------------------------------ geometry
-    def parts(self, q: float, collision: bool = False) -> list[Part]:
-        """Every visual (or collision) part with its mesh moved into the canonical frame at state ``q``."""
+    def posed_parts(self, q: float, collision: bool = False) -> list[tuple[Part, np.ndarray]]:
+        """Every visual (or collision) part as stored (link frame, not copied) with its ``canonical_T_link`` at
+        state ``q``: for callers that need only the moved vertices (:func:`moved_vertices`), not moved meshes."""
         poses = self.link_poses(q)
         source = self.collision_parts if collision else self.visual_parts
+        return [(part, poses[link]) for link, parts in source.items() for part in parts]
+
+    def parts(self, q: float, collision: bool = False) -> list[Part]:
+        """Every visual (or collision) part with its mesh moved into the canonical frame at state ``q``."""
         out = []
-        for link, parts in source.items():
-            for part in parts:
-                mesh = part.mesh.copy()
-                mesh.apply_transform(poses[link])
-                out.append(Part(link, mesh, part.rgba, part.name))
+        for part, pose in self.posed_parts(q, collision):
+            mesh = part.mesh.copy()
+            mesh.apply_transform(pose)
+            out.append(Part(part.link, mesh, part.rgba, part.name))
         return out
 
     def link_meshes(self, q: float, collision: bool = False) -> dict[str, trimesh.Trimesh]:
@@ -312,11 +316,8 @@ class ArticulatedObject:
     def bounds(self, q: float | None = None) -> np.ndarray:
         """Axis-aligned bounds (2, 3) of all visual parts at state ``q`` (default: closed), canonical frame."""
         q = self.joint_range[0] if q is None else q
-        poses = self.link_poses(q)
         # Vertices only: copying every part's trimesh as parts() does was a quarter of a kitchen layout's time.
-        pts = np.concatenate(
-            [moved_vertices(part.mesh, poses[link]) for link, parts in self.visual_parts.items() for part in parts]
-        )
+        pts = np.concatenate([moved_vertices(part.mesh, pose) for part, pose in self.posed_parts(q)])
         return np.stack([pts.min(0), pts.max(0)])
 
     @property

@@ -33,14 +33,13 @@ class CollisionReport:
 def object_solid(obj: ArticulatedObject, q: float, world_T_object: np.ndarray) -> manifold3d.Manifold:
     """Closed solid of the whole object at target state ``q``, in the world frame."""
     world_T_object = np.asarray(world_T_object, float)
-    if all(part.mesh.is_watertight for parts in obj.visual_parts.values() for part in parts):
+    posed = obj.posed_parts(q)
+    if all(part.mesh.is_watertight for part, _ in posed):
         # Each closed part moved straight into the world and united there: no trimesh copies of the parts and no
         # trimesh round trip of their union (that was 70 % of a kitchen's collision check).
-        poses = obj.link_poses(q)
         solids = [
-            manifold_from_arrays(moved_vertices(part.mesh, world_T_object @ poses[link]), part.mesh.faces)
-            for link, parts in obj.visual_parts.items()
-            for part in parts
+            manifold_from_arrays(moved_vertices(part.mesh, world_T_object @ pose), part.mesh.faces)
+            for part, pose in posed
         ]
         return manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
     # Real PartNet-Mobility meshes are open triangle soups: use the union of each part's convex hull, a closed solid
