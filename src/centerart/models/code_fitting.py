@@ -84,8 +84,10 @@ def fit_code(
     obs: Observations,
     cfg: CodeFitConfig = CodeFitConfig(),
     fit_joint: bool = False,
+    start: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float | None, float]:
-    """Optimise a shape code (and, with ``fit_joint``, one shared joint code) to the observations.
+    """Optimise a shape code (and, with ``fit_joint``, one shared joint code) to the observations, starting from
+    ``start`` (code_dim,) or the zero code (the mean of the code prior).
 
     The decoder is frozen (no parameter is updated; its train/eval mode is left as found but dropout is
     disabled during the fit). Returns (code (code_dim,), fitted joint code or None, final data loss).
@@ -99,7 +101,7 @@ def fit_code(
     best = None
     try:
         for j0 in starts:
-            result = _fit_once(decoder, obs, cfg, j0, device)
+            result = _fit_once(decoder, obs, cfg, j0, device, start)
             if best is None or result[2] < best[2]:
                 best = result
     finally:
@@ -109,13 +111,16 @@ def fit_code(
     return best
 
 
-def _fit_once(decoder, obs, cfg, j0, device):
+def _fit_once(decoder, obs, cfg, j0, device, start=None):
     gen = torch.Generator().manual_seed(cfg.seed)
     pts = torch.as_tensor(obs.points, device=device)
     lo = torch.as_tensor(obs.lower, device=device)
     hi = torch.as_tensor(obs.upper, device=device)
     joint_obs = torch.as_tensor(obs.joint, device=device)
-    code = torch.zeros(decoder.config.code_dim, device=device, requires_grad=True)
+    code = torch.zeros(decoder.config.code_dim, device=device)
+    if start is not None:
+        code = torch.as_tensor(np.asarray(start, np.float32).reshape(-1), device=device).clone()
+    code.requires_grad_(True)
     params = [code]
     joint_logit = None
     if j0 is not None:
@@ -141,3 +146,22 @@ def _fit_once(decoder, obs, cfg, j0, device):
         final = float(_interval_loss(pred, lo[idx], hi[idx], cfg.clamp))
     joint_fit = float(torch.sigmoid(joint_logit)) if joint_logit is not None else None
     return code.detach().cpu().numpy().astype(np.float32), joint_fit, final
+
+
+def start_codes_by_fit(
+    decoder: SGDFDecoder, obs: Observations, codes: np.ndarray, points: int = 4096, seed: int = 0
+) -> np.ndarray:
+    """Indices of the training ``codes`` (K, code_dim), best first, by their data loss on a seeded subset of the
+    observations (decoder frozen, observations with known joint codes): starts for :func:`fit_code` on the
+    decoder's learned shapes instead of the prior's mean."""
+    device = next(decoder.parameters()).device
+    idx = np.random.default_rng(seed).choice(len(obs.points), min(points, len(obs.points)), replace=False)
+    pts = torch.as_tensor(obs.points[idx], device=device)
+    lo, hi = (torch.as_tensor(a[idx], device=device) for a in (obs.lower, obs.upper))
+    joint = torch.as_tensor(obs.joint[idx], device=device)
+    losses = []
+    with torch.no_grad():
+        for code in np.asarray(codes, np.float32):
+            z = torch.as_tensor(code, device=device).expand(len(idx), -1)
+            losses.append(float(_interval_loss(decoder.sdf_only(z, joint, pts), lo, hi, CodeFitConfig.clamp)))
+    return np.argsort(losses, kind="stable")
