@@ -4,7 +4,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code, start_codes_by_fit
+from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
 from centerart.models.decoder import DecoderConfig, DecoderOutput
 
 
@@ -65,18 +65,15 @@ def test_fit_code_and_joint_from_partial_depth():
     assert 0.0 <= joint <= 1.0
 
 
-def test_training_codes_ranked_by_fit_and_used_as_start():
-    """The training code whose sphere matches the samples ranks first, and a fit started there stays on it (a fit
-    from the zero code has to travel; with one step it cannot)."""
+def test_fit_starts_from_a_given_code():
+    """A fit started at the matching sphere's code stays on it, where one step from the zero code cannot get; the
+    start is copied, not optimised in place."""
     dec = RadiusDecoder()
-    codes = np.zeros((4, 4), np.float32)
-    codes[:, 0] = [0.15, -0.05, 0.05, 0.1]  # radii 0.35, 0.15, 0.25, 0.30
-    original = codes.copy()
+    start = np.array([0.05, 0.0, 0.0, 0.0], np.float32)  # radius 0.25
+    original = start.copy()
     obs = Observations.from_samples([(0.5, *_sphere_samples(0.25, 0.5))])
-    order = start_codes_by_fit(dec, obs, codes)
-    assert order.tolist() == [2, 3, 1, 0]  # |r - 0.25|: 0, 0.05, 0.1, 0.1 (stable order on the tie)
     cfg = CodeFitConfig(steps=1, lr=1e-3)
-    started, _, loss_started = fit_code(dec, obs, cfg, start=codes[order[0]])
+    started, _, loss_started = fit_code(dec, obs, cfg, start=start)
     _, _, loss_zero = fit_code(dec, obs, cfg)
     assert abs(started[0] - 0.05) < 2e-3 and loss_started < 2e-3 < loss_zero
-    assert np.array_equal(codes, original)  # the start was copied, not optimised in place
+    assert np.array_equal(start, original)

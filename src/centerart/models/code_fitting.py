@@ -74,7 +74,8 @@ class Observations:
         return cls(pts, np.concatenate(lo), np.concatenate(hi), np.full(len(pts), joint, np.float32))
 
 
-def _interval_loss(pred: torch.Tensor, lo: torch.Tensor, hi: torch.Tensor, clamp: float) -> torch.Tensor:
+def interval_loss(pred: torch.Tensor, lo: torch.Tensor, hi: torch.Tensor, clamp: float) -> torch.Tensor:
+    """Mean of relu(lo - s) + relu(s - hi) over points, s the prediction clamped to +-clamp (see the module doc)."""
     s = pred.clamp(-clamp, clamp)
     return (torch.relu(lo.clamp(-clamp, clamp) - s) + torch.relu(s - hi.clamp(-clamp, clamp))).mean()
 
@@ -134,7 +135,7 @@ def _fit_once(decoder, obs, cfg, j0, device, start=None):
             idx = torch.randint(0, n, (min(cfg.points_per_step, n),), generator=gen).to(device)
             j = torch.sigmoid(joint_logit).expand(len(idx)) if joint_logit is not None else joint_obs[idx]
             pred = decoder.sdf_only(code.expand(len(idx), -1), j, pts[idx])
-            loss = _interval_loss(pred, lo[idx], hi[idx], cfg.clamp) + cfg.code_weight * (code**2).sum()
+            loss = interval_loss(pred, lo[idx], hi[idx], cfg.clamp) + cfg.code_weight * (code**2).sum()
             opt.zero_grad(set_to_none=True)
             loss.backward()
             opt.step()
@@ -143,25 +144,6 @@ def _fit_once(decoder, obs, cfg, j0, device, start=None):
         idx = torch.arange(0, n, max(1, n // 20000), device=device)
         j = torch.sigmoid(joint_logit).expand(len(idx)) if joint_logit is not None else joint_obs[idx]
         pred = decoder.sdf_only(code.expand(len(idx), -1), j, pts[idx])
-        final = float(_interval_loss(pred, lo[idx], hi[idx], cfg.clamp))
+        final = float(interval_loss(pred, lo[idx], hi[idx], cfg.clamp))
     joint_fit = float(torch.sigmoid(joint_logit)) if joint_logit is not None else None
     return code.detach().cpu().numpy().astype(np.float32), joint_fit, final
-
-
-def start_codes_by_fit(
-    decoder: SGDFDecoder, obs: Observations, codes: np.ndarray, points: int = 4096, seed: int = 0
-) -> np.ndarray:
-    """Indices of the training ``codes`` (K, code_dim), best first, by their data loss on a seeded subset of the
-    observations (decoder frozen, observations with known joint codes): starts for :func:`fit_code` on the
-    decoder's learned shapes instead of the prior's mean."""
-    device = next(decoder.parameters()).device
-    idx = np.random.default_rng(seed).choice(len(obs.points), min(points, len(obs.points)), replace=False)
-    pts = torch.as_tensor(obs.points[idx], device=device)
-    lo, hi = (torch.as_tensor(a[idx], device=device) for a in (obs.lower, obs.upper))
-    joint = torch.as_tensor(obs.joint[idx], device=device)
-    losses = []
-    with torch.no_grad():
-        for code in np.asarray(codes, np.float32):
-            z = torch.as_tensor(code, device=device).expand(len(idx), -1)
-            losses.append(float(_interval_loss(decoder.sdf_only(z, joint, pts), lo, hi, CodeFitConfig.clamp)))
-    return np.argsort(losses, kind="stable")
