@@ -87,6 +87,7 @@ def object_box(obj: ArticulatedObject, q: float, world_T_object: np.ndarray) -> 
 
 
 def boxes_apart(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two (2, 3) world bounds are more than :data:`AABB_GAP_M` apart along some axis."""
     return bool(np.any(a[0] > b[1] + AABB_GAP_M) or np.any(b[0] > a[1] + AABB_GAP_M))
 
 
