@@ -157,10 +157,10 @@ def main() -> None:
     parser.add_argument("--render-only", action="store_true", help="the render definition, recipe and worker settings")
     args = parser.parse_args()
     if args.render_only:
-        from centerart.scenes.dataset import _opencv_single_threaded
+        from centerart.scenes.dataset import single_threaded_worker
 
-        os.environ["LP_NUM_THREADS"] = "0"  # as parallel workers set them (scenes.dataset._generate_one)
-        _opencv_single_threaded()
+        os.environ["LP_NUM_THREADS"] = "0"  # forced, as for --whole-step, whatever the shell set
+        single_threaded_worker()  # the rest of a parallel worker's settings (scenes.dataset._generate_one)
         print(
             json.dumps(measure(args.objects, "default", "stereo", args.scenes, args.views, 1, args.seed, "fast", False))
         )
