@@ -66,6 +66,8 @@ class TrainDecoderConfig:
     grasp_weighting: GraspWeighting = "label"
     """Weighting of the grasp term: none | label (distance to nearest label) | surface (|sdf|)."""
     sdf_weight: float = 10.0
+    code_weight: float = LossConfig.code_weight
+    """Weight of the Gaussian code prior (DeepSDF's 1/sigma^2 term), in training and in the validation code fits."""
     heldout_object_fraction: float = 0.15
     heldout_states_per_object: int = 1
     val_every: int = 10
@@ -98,6 +100,7 @@ class TrainDecoderConfig:
         at_least("--num-nodes", self.num_nodes, 1)
         for name in ("lr_decoder", "lr_codes", "sdf_weight"):
             positive(f"--{name.replace('_', '-')}", getattr(self, name))
+        at_least("--code-weight", self.code_weight, 0.0)
         between("--heldout-object-fraction", self.heldout_object_fraction, 0.0, 0.9)
 
     def decoder_config(self) -> DecoderConfig:
@@ -106,7 +109,7 @@ class TrainDecoderConfig:
         return replace(PRESETS[self.preset], **self.decoder_overrides)
 
     def loss_config(self) -> LossConfig:
-        return LossConfig(grasp_weighting=self.grasp_weighting, sdf_weight=self.sdf_weight)
+        return LossConfig(grasp_weighting=self.grasp_weighting, sdf_weight=self.sdf_weight, code_weight=self.code_weight)
 
 
 @dataclass
@@ -141,7 +144,7 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
     dcfg, lcfg = cfg.decoder_config(), cfg.loss_config()
     module = DecoderModule(
         dcfg, lcfg, data.split.train_objects, cfg.lr_decoder, cfg.lr_codes, cfg.epochs,
-        heldout_object_states=data.heldout_objects, code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, seed=cfg.seed),
+        heldout_object_states=data.heldout_objects, code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, code_weight=cfg.code_weight, seed=cfg.seed),
     )  # fmt: skip
     last = resume_checkpoint(out, cfg.resume, module)
     out.mkdir(parents=True, exist_ok=True)
