@@ -109,3 +109,27 @@ def test_shell_points_find_grasps_whose_tcp_is_off_the_surface():
     _, with_shell = _run(dec, 0.6, GraspExtractionConfig(geometry=no_check))
     assert len(with_shell) >= 3 and grasp_matches(with_shell.poses[:3], dec._labels(0.6)).any(1).all()
     assert len(without) == 0
+
+
+def test_features_describe_each_grasp_and_a_critic_ranks_by_them():
+    """Every returned grasp carries its features (joint code, clearance within the check's margin, a positive joint
+    SDF change on the moving door); a critic that only rewards approaching the front face reorders the same
+    grasps by that feature, and its probabilities become the scores."""
+    from centerart.models.grasp_critic import GRASP_FEATURES, GraspCritic
+
+    dec, cfg, u = ExactCabinetDecoder(BoxCabinet()), GraspExtractionConfig(), 0.6
+    _, plain = _run(dec, u, cfg)
+    assert len(plain) >= 3 and plain.features.shape == (len(plain), len(GRASP_FEATURES))
+    col = {name: plain.features[:, i] for i, name in enumerate(GRASP_FEATURES)}
+    assert np.allclose(col["joint"], u) and (col["clearance_m"] > -cfg.geometry.clearance_m).all()
+    assert (col["joint_sdf_change_m"] > cfg.moving_sdf_change).all()
+    assert np.allclose(np.exp(col["log_support"]) - 1, plain.support)
+    assert np.allclose(col["approach_front"], -plain.poses[:, 0, 2])
+    w = np.zeros(len(GRASP_FEATURES))
+    w[GRASP_FEATURES.index("approach_front")] = 5.0
+    critic = GraspCritic(np.zeros_like(w), np.ones_like(w), w, 0.0)
+    rec = reconstruct_object(dec, np.zeros(2, np.float32), u, BOUNDS, MeshConfig(resolution=96))
+    ranked = extract_grasps(dec, np.zeros(2, np.float32), u, rec, cfg, critic=critic)
+    front = ranked.features[:, GRASP_FEATURES.index("approach_front")]
+    assert np.all(np.diff(front) <= 1e-12) and np.allclose(ranked.scores, critic.probability(ranked.features))
+    assert front[0] >= col["approach_front"].max() - 1e-12

@@ -79,6 +79,8 @@ class EvalDecoderConfig:
     code_fit_steps: int = 200
     seed: int = 0
     max_objects: int | None = None
+    grasp_critic: bool = True
+    """Rank grasps by the checkpoint's grasp critic (``models.grasp_critic``) where it has one."""
     grasp_extraction: Literal["default", "shell", "before"] = "default"
     """Grasp extraction setting (``inference.decoder_grasps.extraction_setting``): default; shell (no clearance
     check); before (neither shell points nor clearance check), for A/B measurements."""
@@ -250,7 +252,10 @@ def _evaluate_state(loaded, code, obj_folder: Path, st, group: str, cfg, mesh_cf
     obj = ArticulatedObject.load(obj_folder)
     q = obj.denormalize(st.joint)
     t0 = time.perf_counter()
-    recon, grasps = predict_shape_and_grasps(loaded.decoder, code, st.joint, loaded.bounds, mesh_cfg, grasp_cfg)
+    critic = loaded.critic if cfg.grasp_critic else None
+    recon, grasps = predict_shape_and_grasps(
+        loaded.decoder, code, st.joint, loaded.bounds, mesh_cfg, grasp_cfg, critic=critic
+    )
     seconds = time.perf_counter() - t0
     cd, fs = chamfer_fscore(recon.mesh, obj.watertight_mesh(q), seed=cfg.seed)
     r = StateResult(st.object_id, st.state_index, group, st.joint, cd, fs, seconds, len(grasps))

@@ -31,9 +31,10 @@ import torch
 from scipy.spatial import cKDTree
 
 from centerart.grasps.gripper import FLIP_Z
-from centerart.inference.grasp_geometry import GeometryCheckConfig, clear_grasps
+from centerart.inference.grasp_geometry import GeometryCheckConfig, gripper_clearance
 from centerart.inference.reconstruction import Reconstruction, decoder_field
 from centerart.models.decoder import SGDFDecoder, decode_outputs
+from centerart.models.grasp_critic import GRASP_FEATURES, GraspCritic
 
 
 @dataclass(frozen=True)
@@ -79,8 +80,9 @@ def extraction_setting(name: str, **overrides) -> GraspExtractionConfig:
 @dataclass
 class DecoderGrasps:
     poses: np.ndarray  # (K, 4, 4) TCP poses, object frame, ranked best first
-    scores: np.ndarray  # (K,) confidence in [0, 1)
+    scores: np.ndarray  # (K,) confidence in [0, 1): the critic's success probability where one ranked them
     support: np.ndarray  # (K,) number of agreeing candidates
+    features: np.ndarray | None = None  # (K, len(GRASP_FEATURES)): models.grasp_critic.GRASP_FEATURES
 
     def __len__(self) -> int:
         return len(self.poses)
@@ -97,7 +99,7 @@ def rotation_angle_symmetric(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
 
 
 def _empty() -> DecoderGrasps:
-    return DecoderGrasps(np.zeros((0, 4, 4)), np.zeros(0), np.zeros(0, int))
+    return DecoderGrasps(np.zeros((0, 4, 4)), np.zeros(0), np.zeros(0, int), np.zeros((0, len(GRASP_FEATURES))))
 
 
 def extract_grasps(
@@ -107,8 +109,11 @@ def extract_grasps(
     recon: Reconstruction,
     cfg: GraspExtractionConfig = GraspExtractionConfig(),
     device: str | torch.device = "cpu",
+    critic: GraspCritic | None = None,
 ) -> DecoderGrasps:
-    """Ranked grasps on the moving part at normalized joint code ``joint`` (see module doc)."""
+    """Ranked grasps on the moving part at normalized joint code ``joint`` (see module doc). With a ``critic``
+    (:class:`~centerart.models.grasp_critic.GraspCritic`), the grasps that pass NMS and the clearance check are
+    ranked by its success probability, which becomes their score, instead of by the agreement confidence."""
     if recon.raw is None or len(recon.points) == 0:
         return _empty()
     points, sdf, raw = _query_points(decoder, code, joint, recon, cfg, device)
@@ -121,15 +126,34 @@ def extract_grasps(
     idx = np.flatnonzero(keep)
     if len(idx) > cfg.max_candidates:  # the best-offset candidates; deterministic
         idx = idx[np.argsort(off_norm[idx], kind="stable")[: cfg.max_candidates]]
-    pos = points[idx] + offset[idx]
-    rot = out.rotation.numpy()[idx]
-    off = off_norm[idx]
+    pos, rot, off = points[idx] + offset[idx], out.rotation.numpy()[idx], off_norm[idx]
+    tcp_sdf, change = _joint_sdf_change(decoder, code, joint, pos, cfg, device)
     if cfg.require_moving:
-        moving = _on_moving_part(decoder, code, joint, pos, cfg, device)
-        pos, rot, off = pos[moving], rot[moving], off[moving]
+        moving = change > cfg.moving_sdf_change
+        pos, rot, off, tcp_sdf, change = pos[moving], rot[moving], off[moving], tcp_sdf[moving], change[moving]
         if len(pos) == 0:
             return _empty()
-    # Consistency: neighbours (by predicted grasp position) whose predicted rotation agrees.
+    support = _support(pos, rot, cfg)
+    score = support / (support + cfg.support_half) * np.exp(-off / cfg.offset_scale)
+    c = _nms(pos, rot, score, cfg, cfg.top_k * (cfg.check_pool if cfg.geometry.enabled else 1))
+    poses = np.tile(np.eye(4), (len(c), 1, 1))
+    poses[:, :3, :3] = rot[c]
+    poses[:, :3, 3] = pos[c]
+    clearance = gripper_clearance(_sdf_fn(decoder, code, joint, device), poses)
+    features = np.stack(
+        [np.log1p(support[c]), off[c], tcp_sdf[c], change[c], clearance, -rot[c][:, 0, 2], np.full(len(c), joint)], 1
+    )
+    ok = np.flatnonzero(clearance > -cfg.geometry.clearance_m) if cfg.geometry.enabled else np.arange(len(c))
+    scores = score[c]
+    if critic is not None:
+        scores = critic.probability(features)
+        ok = ok[np.argsort(-scores[ok], kind="stable")]
+    ok = ok[: cfg.top_k]
+    return DecoderGrasps(poses[ok], scores[ok], support[c][ok], features[ok])
+
+
+def _support(pos: np.ndarray, rot: np.ndarray, cfg: GraspExtractionConfig) -> np.ndarray:
+    """Per candidate: how many others predict a grasp within ``agree_distance`` whose rotation agrees."""
     tree = cKDTree(pos)
     support = np.zeros(len(pos), int)
     max_angle = np.deg2rad(cfg.agree_angle_deg)
@@ -138,13 +162,7 @@ def extract_grasps(
         nb = nb[nb != i]
         if len(nb):
             support[i] = int((rotation_angle_symmetric(rot[i][None], rot[nb]) < max_angle).sum())
-    score = support / (support + cfg.support_half) * np.exp(-off / cfg.offset_scale)
-    c = _nms(pos, rot, score, cfg, cfg.top_k * (cfg.check_pool if cfg.geometry.enabled else 1))
-    poses = np.tile(np.eye(4), (len(c), 1, 1))
-    poses[:, :3, :3] = rot[c]
-    poses[:, :3, 3] = pos[c]
-    ok = np.flatnonzero(clear_grasps(_sdf_fn(decoder, code, joint, device), poses, cfg.geometry))[: cfg.top_k]
-    return DecoderGrasps(poses[ok], score[c][ok], support[c][ok])
+    return support
 
 
 def _nms(pos: np.ndarray, rot: np.ndarray, score: np.ndarray, cfg: GraspExtractionConfig, limit: int) -> np.ndarray:
@@ -186,14 +204,15 @@ def _query_points(decoder, code, joint, recon: Reconstruction, cfg: GraspExtract
     return np.concatenate([recon.points, shell]), np.concatenate([recon.sdf, sdf]), raw_all
 
 
-def _on_moving_part(decoder, code, joint, pos, cfg, device) -> np.ndarray:
-    """True where the predicted SDF at the grasp position changes when the joint moves by +-moving_delta."""
+def _joint_sdf_change(decoder, code, joint, pos, cfg, device) -> tuple[np.ndarray, np.ndarray]:
+    """(predicted SDF at ``pos``, how much it changes (m) when the joint moves by +-``moving_delta``): a point on
+    the moving part changes, one on a static part does not."""
     base = _sdf_fn(decoder, code, joint, device)(pos)
     change = np.zeros(len(pos))
     for j in (joint - cfg.moving_delta, joint + cfg.moving_delta):
         if 0.0 <= j <= 1.0:
             change = np.maximum(change, np.abs(_sdf_fn(decoder, code, j, device)(pos) - base))
-    return change > cfg.moving_sdf_change
+    return np.asarray(base, float), change
 
 
 def predict_shape_and_grasps(
@@ -204,9 +223,11 @@ def predict_shape_and_grasps(
     mesh_cfg=None,
     grasp_cfg: GraspExtractionConfig = GraspExtractionConfig(),
     device: str | torch.device = "cpu",
+    critic: GraspCritic | None = None,
 ) -> tuple[Reconstruction, DecoderGrasps]:
-    """Mesh (coarse-to-fine) and ranked grasps of one object at normalized joint code ``joint`` (object frame)."""
+    """Mesh (coarse-to-fine) and ranked grasps of one object at normalized joint code ``joint`` (object frame);
+    ``critic`` as in :func:`extract_grasps`."""
     from centerart.inference.reconstruction import MeshConfig, reconstruct_object
 
     recon = reconstruct_object(decoder, code, joint, bounds, mesh_cfg or MeshConfig(), device)
-    return recon, extract_grasps(decoder, code, joint, recon, grasp_cfg, device)
+    return recon, extract_grasps(decoder, code, joint, recon, grasp_cfg, device, critic)

@@ -54,7 +54,14 @@ def clear_grasps(
     (object-frame points (N, 3) -> predicted SDF (N,), metres, negative inside)."""
     if not cfg.enabled or len(poses) == 0:
         return np.ones(len(poses), bool)
+    return gripper_clearance(sdf_fn, poses) > -cfg.clearance_m
+
+
+def gripper_clearance(sdf_fn: Callable[[np.ndarray], np.ndarray], poses: np.ndarray) -> np.ndarray:
+    """(K,) the least predicted SDF (m) over each open gripper's points (:func:`open_gripper_points`) at TCP poses
+    (K, 4, 4, object frame): how far the hand stays out of the shape (negative: that deep inside it)."""
+    if len(poses) == 0:
+        return np.zeros(0)
     local = open_gripper_points()
     world = np.einsum("kij,nj->kni", poses[:, :3, :3], local) + poses[:, None, :3, 3]
-    sdf = np.asarray(sdf_fn(world.reshape(-1, 3)), float).reshape(len(poses), len(local))
-    return sdf.min(1) > -cfg.clearance_m
+    return np.asarray(sdf_fn(world.reshape(-1, 3)), float).reshape(len(poses), len(local)).min(1)

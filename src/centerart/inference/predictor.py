@@ -52,6 +52,10 @@ class PredictorConfig:
     (nearest, or the nearby one whose surface fits the observed depth best; :mod:`~.shape_prior`)."""
     batch_objects: bool = True
     """Decode all objects of an image at once (their decoder calls merged into shared batches)."""
+    grasp_critic: bool = True
+    """Rank each object's grasps by the decoder's grasp critic (its physics success probability, which becomes the
+    grasp score; :mod:`centerart.models.grasp_critic`) where the checkpoint has one; else by the decoder's
+    agreement confidence."""
     runtime: Literal["auto", "torch", "onnxruntime"] = "auto"
     """What runs the decoder for grasps and meshes: onnxruntime (CPU only, about twice as fast as torch there),
     torch, or auto (onnxruntime on a CPU when installed, else torch). SDF refinement always uses torch."""
@@ -185,10 +189,12 @@ class Predictor:
         mesh_cfg = MeshConfig(resolution=self.config.grasp_resolution)
         grasp_cfg = GraspExtractionConfig(top_k=self.config.top_k_grasps * 3)
         bounds, device = self.decoder.bounds, self.device
-        tasks = [
-            (lambda dec, c=code, j=joint: predict_shape_and_grasps(dec, c, j, bounds, mesh_cfg, grasp_cfg, device))
-            for _, code, joint, _, _ in starts
-        ]
+        critic = self.decoder.critic if self.config.grasp_critic else None
+
+        def task(code, joint):
+            return lambda dec: predict_shape_and_grasps(dec, code, joint, bounds, mesh_cfg, grasp_cfg, device, critic)
+
+        tasks = [task(code, joint) for _, code, joint, _, _ in starts]
         decoded = (
             run_batched(self.fast_decoder, tasks)
             if self.config.batch_objects

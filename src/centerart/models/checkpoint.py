@@ -14,6 +14,9 @@ Contents (a plain dict, loadable with ``torch.load(weights_only=True)``):
 - ``training_objects``: content fingerprint (:mod:`centerart.assets.fingerprint`) of every object whose data
   trained it, by object id (None where the folder was not found); the scene evaluation refuses test objects
   that share one.
+
+A grasp critic fitted to the checkpoint's grasps may sit beside it as ``<checkpoint>.critic.json``
+(:mod:`~centerart.models.grasp_critic`); :func:`load_decoder` loads it too.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import torch
 from centerart.errors import CenterArtError
 from centerart.models.checkpoint_files import check_fields, read_blob, write_blob
 from centerart.models.decoder import DecoderConfig, SGDFDecoder
+from centerart.models.grasp_critic import GraspCritic, load_critic
 
 FORMAT = "centerart-sgdf-decoder"
 VERSION = 1
@@ -41,6 +45,8 @@ class LoadedDecoder:
     bounds: np.ndarray
     path: Path
     meta: dict = field(default_factory=dict, repr=False)
+    critic: GraspCritic | None = field(default=None, repr=False)
+    """The grasp critic stored beside the checkpoint (:mod:`~centerart.models.grasp_critic`), if any."""
 
     def code(self, object_id: str) -> np.ndarray:
         if object_id not in self.codes:
@@ -131,6 +137,7 @@ def load_decoder(path: Path | None = None, device: str | torch.device = "cpu") -
         bounds=blob["bounds"].numpy().astype(np.float64),
         path=path,
         meta=meta,
+        critic=load_critic(path),
     )
 
 

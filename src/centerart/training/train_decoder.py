@@ -109,7 +109,9 @@ class TrainDecoderConfig:
         return replace(PRESETS[self.preset], **self.decoder_overrides)
 
     def loss_config(self) -> LossConfig:
-        return LossConfig(grasp_weighting=self.grasp_weighting, sdf_weight=self.sdf_weight, code_weight=self.code_weight)
+        return LossConfig(
+            grasp_weighting=self.grasp_weighting, sdf_weight=self.sdf_weight, code_weight=self.code_weight
+        )
 
 
 @dataclass
@@ -144,7 +146,8 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
     dcfg, lcfg = cfg.decoder_config(), cfg.loss_config()
     module = DecoderModule(
         dcfg, lcfg, data.split.train_objects, cfg.lr_decoder, cfg.lr_codes, cfg.epochs,
-        heldout_object_states=data.heldout_objects, code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, code_weight=cfg.code_weight, seed=cfg.seed),
+        heldout_object_states=data.heldout_objects,
+        code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, code_weight=cfg.code_weight, seed=cfg.seed),
     )  # fmt: skip
     last = resume_checkpoint(out, cfg.resume, module)
     out.mkdir(parents=True, exist_ok=True)

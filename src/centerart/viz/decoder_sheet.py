@@ -118,10 +118,13 @@ def show_decoder(cfg: ShowDecoderConfig) -> Path:
     code, how = _shape_code(loaded, cfg)
     joints = np.linspace(0.0, 1.0, cfg.states) if cfg.states > 1 else np.array([0.0])
     mesh_cfg, grasp_cfg = MeshConfig(resolution=cfg.resolution), GraspExtractionConfig(top_k=cfg.top_k)
-    panels = [
-        (float(u), *predict_shape_and_grasps(loaded.decoder, code, float(u), loaded.bounds, mesh_cfg, grasp_cfg))
-        for u in joints
-    ]
+
+    def decode(u: float):  # the critic, where the checkpoint has one, ranks the grasps drawn as it does in predict
+        return predict_shape_and_grasps(
+            loaded.decoder, code, u, loaded.bounds, mesh_cfg, grasp_cfg, critic=loaded.critic
+        )
+
+    panels = [(float(u), *decode(float(u))) for u in joints]
     renderer = ObjectRenderer(cfg.image_width, cfg.image_height)
     lo, hi = _extent(panels, loaded.bounds)
     renderer.set_floor(lo[2])

@@ -1,0 +1,154 @@
+"""Grasp critic: the probability that a decoded grasp succeeds in physics, from what the extraction knows of it.
+
+The decoder's own confidence (neighbour agreement x small offset, ``inference.decoder_grasps``) ranks grasps
+usefully but says little about success: on the shipped decoder's objects a score of 0.6 meant anything from 20 % to
+90 % (``weights/sgdf_small_eval.json``). The critic is a logistic regression over :data:`GRASP_FEATURES` (each
+standardized), fitted to physics outcomes of the decoder's own grasps on objects it was not trained on and that are
+not test objects (``benchmarks/grasp_critic.py``). Its probability becomes the grasp's score and its ranking; the
+same features and outcomes give its calibration.
+
+A critic belongs to one decoder: it is stored as JSON beside the checkpoint (:func:`critic_path`), with the
+checkpoint's SHA-256, and read without running code; a critic of another checkpoint is refused.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from centerart.errors import CenterArtError
+
+FORMAT = "centerart-grasp-critic"
+VERSION = 1
+
+GRASP_FEATURES = (
+    "log_support",
+    "offset_m",
+    "tcp_sdf_m",
+    "joint_sdf_change_m",
+    "clearance_m",
+    "approach_front",
+    "joint",
+)
+"""What the extraction knows of each grasp (object frame, metres): log(1 + agreeing candidates); |predicted
+offset|; predicted SDF at the TCP; how much the SDF at the TCP changes when the joint moves by the extraction's
+``moving_delta`` (large far from a hinge, where a pull has leverage); the open gripper's least SDF
+(``inference.grasp_geometry.gripper_clearance``); the approach direction's component towards the front face (-x
+of the object frame: 1 is straight at the front); the normalized joint code."""
+
+
+@dataclass(frozen=True)
+class GraspCritic:
+    """p(success) = sigmoid(weights . (x - mean) / scale + bias) for features x in :data:`GRASP_FEATURES` order."""
+
+    mean: np.ndarray
+    scale: np.ndarray
+    weights: np.ndarray
+    bias: float
+    info: dict = field(default_factory=dict)
+    """How it was fitted: data, counts, penalty, the decoder checkpoint's SHA-256 (``decoder_sha256``)."""
+
+    def probability(self, features: np.ndarray) -> np.ndarray:
+        """(K,) success probabilities of grasps with features (K, F)."""
+        from scipy.special import expit
+
+        z = (np.asarray(features, float) - self.mean) / self.scale
+        return expit(z @ self.weights + self.bias)
+
+    def to_dict(self) -> dict:
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "features": list(GRASP_FEATURES),
+            "mean": self.mean.tolist(),
+            "scale": self.scale.tolist(),
+            "weights": self.weights.tolist(),
+            "bias": float(self.bias),
+            "info": self.info,
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict, source: str = "grasp critic") -> GraspCritic:
+        """The critic of :meth:`to_dict`; a wrong format, feature list or non-finite number names ``source``."""
+        if not isinstance(d, dict) or d.get("format") != FORMAT or d.get("version") != VERSION:
+            raise CenterArtError(f"{source}: not a centerart grasp critic (expected format {FORMAT!r} v{VERSION})")
+        if d.get("features") != list(GRASP_FEATURES):
+            raise CenterArtError(f"{source}: features {d.get('features')} differ from {list(GRASP_FEATURES)}")
+        try:
+            arrays = [np.asarray(d[k], float) for k in ("mean", "scale", "weights")]
+            bias = float(d["bias"])
+        except (KeyError, TypeError, ValueError) as err:
+            raise CenterArtError(f"{source}: damaged grasp critic ({type(err).__name__}: {err})") from None
+        n = len(GRASP_FEATURES)
+        if any(a.shape != (n,) or not np.isfinite(a).all() for a in arrays) or not np.isfinite(bias):
+            raise CenterArtError(f"{source}: grasp critic needs {n} finite means, scales and weights")
+        if (arrays[1] <= 0).any():
+            raise CenterArtError(f"{source}: grasp critic scales must be positive")
+        return cls(*arrays, bias, dict(d.get("info") or {}))
+
+
+def fit_critic(features: np.ndarray, outcomes: np.ndarray, l2: float = 1.0, info: dict | None = None) -> GraspCritic:
+    """Logistic regression of physics ``outcomes`` (K,) bool on ``features`` (K, F), each standardized, with the
+    penalty ``l2 / 2 * |weights|^2`` (bias free), by L-BFGS. Scipy does the optimization; the model itself is
+    these few lines rather than a new dependency (scikit-learn) for one linear classifier."""
+    from scipy.optimize import minimize
+    from scipy.special import expit, log_expit
+
+    x, y = np.asarray(features, float), np.asarray(outcomes, bool).astype(float)
+    if len(x) != len(y) or x.ndim != 2 or x.shape[1] != len(GRASP_FEATURES) or len(set(y.tolist())) < 2:
+        raise ValueError(f"fit_critic: need (K, {len(GRASP_FEATURES)}) features and both outcomes, got {x.shape}")
+    mean, scale = x.mean(0), np.maximum(x.std(0), 1e-9)
+    z = (x - mean) / scale
+
+    def loss(theta):
+        w, b = theta[:-1], theta[-1]
+        logit = z @ w + b
+        nll = -(y * log_expit(logit) + (1 - y) * log_expit(-logit)).sum()
+        residual = expit(logit) - y
+        grad = np.append(z.T @ residual + l2 * w, residual.sum())
+        return nll + 0.5 * l2 * (w @ w), grad
+
+    theta = minimize(loss, np.zeros(z.shape[1] + 1), jac=True, method="L-BFGS-B").x
+    return GraspCritic(mean, scale, theta[:-1], float(theta[-1]), dict(info or {}))
+
+
+def critic_path(checkpoint: Path) -> Path:
+    """Where the critic of a decoder checkpoint lives: ``<checkpoint>.critic.json`` beside it."""
+    checkpoint = Path(checkpoint)
+    return checkpoint.with_name(checkpoint.name + ".critic.json")
+
+
+def file_sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def save_critic(critic: GraspCritic, checkpoint: Path) -> Path:
+    """Write ``critic`` beside ``checkpoint`` (atomic), recording the checkpoint's SHA-256."""
+    from centerart.utils.atomic import atomic_write_json
+
+    d = critic.to_dict()
+    d["info"] = {**d["info"], "decoder_sha256": file_sha256(checkpoint)}
+    atomic_write_json(critic_path(checkpoint), d)
+    return critic_path(checkpoint)
+
+
+def load_critic(checkpoint: Path) -> GraspCritic | None:
+    """The critic stored beside ``checkpoint``; None where there is none. A damaged one, or one fitted to another
+    checkpoint (its recorded SHA-256 differs), is a :class:`CenterArtError` naming the file."""
+    path = critic_path(checkpoint)
+    if not path.is_file():
+        return None
+    try:
+        d = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise CenterArtError(f"{path}: unreadable grasp critic ({type(err).__name__})") from None
+    critic = GraspCritic.from_dict(d, str(path))
+    if critic.info.get("decoder_sha256") != file_sha256(checkpoint):
+        raise CenterArtError(
+            f"{path}: fitted to another decoder than {checkpoint} (SHA-256 differs); refit or delete it"
+        )
+    return critic

@@ -1,0 +1,81 @@
+"""The grasp critic: a logistic regression that recovers a known success model, is calibrated on its own kind of
+data, round-trips through JSON beside its checkpoint and refuses a critic of another checkpoint."""
+
+import json
+
+import numpy as np
+import pytest
+
+from centerart.errors import CenterArtError
+from centerart.evaluation.metrics import score_calibration
+from centerart.models.grasp_critic import (
+    GRASP_FEATURES,
+    GraspCritic,
+    critic_path,
+    fit_critic,
+    load_critic,
+    save_critic,
+)
+
+F = len(GRASP_FEATURES)
+
+
+def _data(n: int, seed: int):
+    """Features with the scales of real ones; success drawn from a known logistic model on two of them."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(0.0, 1.0, (n, F)) * np.array([1.0, 0.005, 0.01, 0.01, 0.01, 0.5, 0.4]) + 0.1
+    logit = 3.0 * (x[:, 3] - 0.1) / 0.01 - 2.0 * (x[:, 5] - 0.1) / 0.5
+    return x, rng.random(n) < 1.0 / (1.0 + np.exp(-logit))
+
+
+def test_fit_recovers_the_success_model_and_is_calibrated_on_new_data():
+    critic = fit_critic(*_data(4000, 0), l2=1.0)
+    w = critic.weights  # per standard deviation of each feature
+    assert w[3] == pytest.approx(3.0, abs=0.4) and w[5] == pytest.approx(-2.0, abs=0.4)
+    assert np.abs(np.delete(w, [3, 5])).max() < 0.3
+    x, y = _data(4000, 1)
+    cal = score_calibration(critic.probability(x), y)
+    assert cal["ece"] < 0.04 and cal["auroc"] > 0.85
+
+
+def test_penalty_shrinks_the_weights():
+    x, y = _data(500, 2)
+    assert np.abs(fit_critic(x, y, l2=1000.0).weights).sum() < 0.5 * np.abs(fit_critic(x, y, l2=0.1).weights).sum()
+
+
+def test_fit_needs_both_outcomes():
+    x, _ = _data(50, 3)
+    with pytest.raises(ValueError, match="both outcomes"):
+        fit_critic(x, np.ones(50, bool))
+
+
+def test_saved_beside_its_checkpoint_and_refused_for_another(tmp_path):
+    ckpt = tmp_path / "decoder.pt"
+    ckpt.write_bytes(b"weights")
+    assert load_critic(ckpt) is None  # none stored: the decoder's own ranking
+    critic = fit_critic(*_data(300, 4), info={"objects": 3})
+    path = save_critic(critic, ckpt)
+    assert path == critic_path(ckpt) == tmp_path / "decoder.pt.critic.json"
+    back = load_critic(ckpt)
+    x, _ = _data(20, 5)
+    assert np.allclose(back.probability(x), critic.probability(x)) and back.info["objects"] == 3
+    ckpt.write_bytes(b"other weights")
+    with pytest.raises(CenterArtError, match="decoder.pt.critic.json: fitted to another decoder"):
+        load_critic(ckpt)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda d: d.update(format="x"), "not a centerart grasp critic"),
+        (lambda d: d.update(features=d["features"][:-1]), "features"),
+        (lambda d: d.update(weights=[float("nan")] * F), "finite"),
+        (lambda d: d.update(scale=[0.0] * F), "positive"),
+        (lambda d: d.pop("bias"), "damaged"),
+    ],
+)
+def test_damaged_critic_is_one_clear_error(change, message):
+    d = fit_critic(*_data(300, 6)).to_dict()
+    change(d)
+    with pytest.raises(CenterArtError, match=message):
+        GraspCritic.from_dict(json.loads(json.dumps(d)), "c.json")
