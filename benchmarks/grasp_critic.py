@@ -155,8 +155,9 @@ def fit(args) -> dict:
             "grasps": int(sum(len(r["ok"]) for r in rows)), "l2": best["l2"], "cross_validation": cv}  # fmt: skip
     critic = fit_critic(*stacked(rows), l2=best["l2"], info=info)
     saved = str(save_critic(critic, checkpoint)) if args.save else None
-    return {"cross_validation": cv, "chosen_l2": best["l2"], "weights": dict(zip(GRASP_FEATURES, critic.weights.tolist(),
-            strict=True)), "saved": saved, "in_sample": summarize(rows, critic)}  # fmt: skip
+    weights = dict(zip(GRASP_FEATURES, critic.weights.tolist(), strict=True))
+    return {"cross_validation": cv, "chosen_l2": best["l2"], "weights": weights, "bias": critic.bias, "saved": saved,
+            "in_sample": summarize(rows, critic)}  # fmt: skip
 
 
 def evaluate(args) -> dict:

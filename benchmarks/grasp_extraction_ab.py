@@ -7,7 +7,8 @@ the true mesh. Prints JSON.
 
 Settings (``inference.decoder_grasps.extraction_setting``): ``before`` (the reconstruction's own points within 2
 cm of the surface, no clearance check: the extraction before the shell points), ``shell`` (plus 20k points up to 4
-cm either side of the surface), ``default`` (plus the open-gripper clearance check). ``--data`` is the folder that
+cm either side of the surface), ``default`` (plus the open-gripper clearance check), ``critic`` (the default
+extraction ranked by the checkpoint's grasp critic, ``models/grasp_critic.py``). ``--data`` is the folder that
 holds the checkpoint's training ``objects/`` (a recipe's output folder); the objects are the checkpoint's trained
 codes, ``--objects-per-category A:B`` of each category in id order. With ``--fit-codes-from SDF``, the objects are
 instead those of ``--objects`` (held-out objects no checkpoint trained on), their codes fitted to their SDF samples
@@ -37,6 +38,7 @@ from centerart.inference.reconstruction import MeshConfig, reconstruct_object
 from centerart.models.checkpoint import load_decoder
 
 SETTINGS = {name: extraction_setting(name) for name in ("before", "shell", "default")}
+SETTINGS["critic"] = SETTINGS["default"]  # ranked by the checkpoint's grasp critic (models/grasp_critic.py)
 STATES = {"closed": 0.0, "open": 1.0}
 
 
@@ -99,6 +101,8 @@ def main() -> None:
     settings = {name: SETTINGS[name] for name in args.settings.split(",")}
     torch.set_num_threads(args.threads)
     loaded = load_decoder(args.checkpoint)
+    if "critic" in settings and loaded.critic is None:
+        ap.error(f"--settings critic: {loaded.path} has no grasp critic beside it (benchmarks/grasp_critic.py fit)")
     if args.fit_codes_from is not None:
         codes, objects = fitted_codes(loaded, args.fit_codes_from), args.objects
     else:
@@ -114,7 +118,9 @@ def main() -> None:
             row = {"object_id": oid, "state": kind, "chamfer_mm": chamfer, "fscore": fscore}
             for name, cfg in settings.items():
                 t0 = time.perf_counter()
-                g = extract_grasps(loaded.decoder, code, u, recon, cfg)
+                g = extract_grasps(
+                    loaded.decoder, code, u, recon, cfg, critic=loaded.critic if name == "critic" else None
+                )
                 seconds = time.perf_counter() - t0
                 row[name] = {"count": len(g), "ok": execute_grasps(obj, q, g.poses, 5), "seconds": seconds}
             rows.append(row)

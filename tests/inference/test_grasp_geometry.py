@@ -38,3 +38,17 @@ def test_disabled_or_empty():
 def test_grasp_from_the_side_clears_where_a_top_down_one_does_not():
     side = make_pose(np.array([[0.0, 0, 1], [0, 1, 0], [-1, 0, 0]]), [0.0, 0.0, 0.06])  # approach along +x
     assert clear_grasps(half_space, np.stack([side, _top_down(-0.02)])).tolist() == [True, False]
+
+
+def test_material_between_pads_and_clearance_are_the_least_sdf_of_their_regions():
+    """Top-down over the half-space: the closing region spans the pads' 2 cm length about the TCP, so its least SDF
+    is the TCP height less a third of it; the clearance checks the palm and fingers down to the TCP only."""
+    from centerart.inference.grasp_geometry import gripper_clearance, material_between_pads
+
+    poses = np.stack([_top_down(h) for h in (0.05, 0.005, -0.01)])
+    between = material_between_pads(half_space, poses)
+    assert np.allclose(between, [0.05, 0.005, -0.01] - np.array(0.02 / 3), atol=1e-9)
+    assert between[2] < 0 < between[0]  # the pads close on material only when the TCP is at or under the surface
+    clearance = gripper_clearance(half_space, poses)
+    assert np.allclose(clearance, [0.05, 0.005, -0.01], atol=1e-9)
+    assert material_between_pads(half_space, np.zeros((0, 4, 4))).shape == (0,)

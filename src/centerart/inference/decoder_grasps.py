@@ -31,7 +31,7 @@ import torch
 from scipy.spatial import cKDTree
 
 from centerart.grasps.gripper import FLIP_Z
-from centerart.inference.grasp_geometry import GeometryCheckConfig, gripper_clearance
+from centerart.inference.grasp_geometry import GeometryCheckConfig, gripper_clearance, material_between_pads
 from centerart.inference.reconstruction import Reconstruction, decoder_field
 from centerart.models.decoder import SGDFDecoder, decode_outputs
 from centerart.models.grasp_critic import GRASP_FEATURES, GraspCritic
@@ -139,9 +139,20 @@ def extract_grasps(
     poses = np.tile(np.eye(4), (len(c), 1, 1))
     poses[:, :3, :3] = rot[c]
     poses[:, :3, 3] = pos[c]
-    clearance = gripper_clearance(_sdf_fn(decoder, code, joint, device), poses)
+    sdf_fn = _sdf_fn(decoder, code, joint, device)
+    clearance, between = gripper_clearance(sdf_fn, poses), material_between_pads(sdf_fn, poses)
     features = np.stack(
-        [np.log1p(support[c]), off[c], tcp_sdf[c], change[c], clearance, -rot[c][:, 0, 2], np.full(len(c), joint)], 1
+        [
+            np.log1p(support[c]),
+            off[c],
+            tcp_sdf[c],
+            change[c],
+            clearance,
+            between,
+            -rot[c][:, 0, 2],
+            np.full(len(c), joint),
+        ],
+        1,
     )
     ok = np.flatnonzero(clearance > -cfg.geometry.clearance_m) if cfg.geometry.enabled else np.arange(len(c))
     scores = score[c]

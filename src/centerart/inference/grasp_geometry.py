@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from centerart.grasps.gripper import MAX_OPENING, gripper_boxes
+from centerart.grasps.gripper import FINGER_PAD_LENGTH, MAX_OPENING, gripper_boxes
 
 
 @dataclass(frozen=True)
@@ -57,11 +57,28 @@ def clear_grasps(
     return gripper_clearance(sdf_fn, poses) > -cfg.clearance_m
 
 
+def closing_region_points() -> np.ndarray:
+    """(M, 3) points of the region the closing pads sweep, TCP frame: between the open pads (y within
+    +-``MAX_OPENING`` / 2), over the pads' length along the approach (z within +-``FINGER_PAD_LENGTH`` / 2)."""
+    extents = np.array([0.0, MAX_OPENING, FINGER_PAD_LENGTH])
+    return _box_grid(extents, np.eye(4), (1, 9, 3))
+
+
+def material_between_pads(sdf_fn: Callable[[np.ndarray], np.ndarray], poses: np.ndarray) -> np.ndarray:
+    """(K,) the least predicted SDF (m) in the region the closing pads sweep (:func:`closing_region_points`) at
+    TCP poses (K, 4, 4, object frame): negative where the fingers would close on decoded material."""
+    return _least_sdf(sdf_fn, poses, closing_region_points())
+
+
 def gripper_clearance(sdf_fn: Callable[[np.ndarray], np.ndarray], poses: np.ndarray) -> np.ndarray:
     """(K,) the least predicted SDF (m) over each open gripper's points (:func:`open_gripper_points`) at TCP poses
     (K, 4, 4, object frame): how far the hand stays out of the shape (negative: that deep inside it)."""
+    return _least_sdf(sdf_fn, poses, open_gripper_points())
+
+
+def _least_sdf(sdf_fn: Callable[[np.ndarray], np.ndarray], poses: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """(K,) the least SDF over TCP-frame points ``local`` (M, 3) placed at each pose (K, 4, 4, object frame)."""
     if len(poses) == 0:
         return np.zeros(0)
-    local = open_gripper_points()
     world = np.einsum("kij,nj->kni", poses[:, :3, :3], local) + poses[:, None, :3, 3]
     return np.asarray(sdf_fn(world.reshape(-1, 3)), float).reshape(len(poses), len(local)).min(1)

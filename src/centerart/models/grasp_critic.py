@@ -31,14 +31,16 @@ GRASP_FEATURES = (
     "tcp_sdf_m",
     "joint_sdf_change_m",
     "clearance_m",
+    "between_pads_sdf_m",
     "approach_front",
     "joint",
 )
 """What the extraction knows of each grasp (object frame, metres): log(1 + agreeing candidates); |predicted
 offset|; predicted SDF at the TCP; how much the SDF at the TCP changes when the joint moves by the extraction's
 ``moving_delta`` (large far from a hinge, where a pull has leverage); the open gripper's least SDF
-(``inference.grasp_geometry.gripper_clearance``); the approach direction's component towards the front face (-x
-of the object frame: 1 is straight at the front); the normalized joint code."""
+(``inference.grasp_geometry.gripper_clearance``); the least SDF where the closing pads sweep (negative: they close
+on decoded material; ``inference.grasp_geometry.material_between_pads``); the approach direction's component
+towards the front face (-x of the object frame: 1 is straight at the front); the normalized joint code."""
 
 
 @dataclass(frozen=True)
