@@ -57,7 +57,7 @@ def fitted_codes(loaded, sdf: Path, steps: int = 200, seed: int = 0) -> dict[str
     by_object: dict[str, list] = {}
     for s in load_states(sdf, 30000, seed, progress=False):
         by_object.setdefault(s.object_id, []).append(s)
-    return {oid: fitted_code(loaded.decoder, states, steps, seed) for oid, states in sorted(by_object.items())}
+    return {oid: fitted_code(loaded, states, steps, seed) for oid, states in sorted(by_object.items())}
 
 
 def summarize(rows: list[dict], settings=tuple(SETTINGS)) -> dict:

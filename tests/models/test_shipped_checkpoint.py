@@ -45,3 +45,24 @@ def test_shipped_checkpoint_reconstructs_training_object(shipped, tmp_path):
     assert cd <= 1.25 * bound + 1.0, (cd, bound)
     assert np.isfinite(fs)
     assert np.all(np.diff(grasps.scores) <= 1e-12)  # grasps (if any) come ranked
+
+
+def test_shipped_grasp_critic_belongs_to_the_shipped_decoder(shipped):
+    """The critic beside the shipped checkpoint loads with it (its SHA-256 matches) and gives probabilities that
+    grow with the gripper's clearance, the feature it weighs most (``weights/README.md``)."""
+    from centerart.models.grasp_critic import GRASP_FEATURES
+
+    critic = shipped.critic
+    assert critic is not None and critic.info["objects"] >= 40
+    x = np.tile(critic.mean, (3, 1))
+    x[:, GRASP_FEATURES.index("clearance_m")] += np.array([-0.01, 0.0, 0.01])
+    p = critic.probability(x)
+    assert ((p > 0) & (p < 1)).all() and np.all(np.diff(p) > 0)
+
+
+def test_codes_are_fitted_under_the_prior_the_decoder_was_trained_with(shipped):
+    from dataclasses import replace
+
+    assert shipped.code_weight == shipped.meta["train_config"]["loss"]["code_weight"] == 1e-4
+    assert replace(shipped, meta={"train_config": {"loss": {"code_weight": 0.01}}}).code_weight == 0.01
+    assert replace(shipped, meta={}).code_weight == 1e-4  # recorded none: the default

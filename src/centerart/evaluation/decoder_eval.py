@@ -233,15 +233,17 @@ def _jobs(loaded, by_obj: dict[str, list], trained_ids: set[str], cfg: EvalDecod
 
 def _object_code(loaded, oid: str, trained: bool, states: list, cfg: EvalDecoderConfig) -> np.ndarray:
     """The trained shape code, or one fitted to all the object's SDF samples with the decoder frozen."""
-    return loaded.code(oid) if trained else fitted_code(loaded.decoder, states, cfg.code_fit_steps, cfg.seed)
+    return loaded.code(oid) if trained else fitted_code(loaded, states, cfg.code_fit_steps, cfg.seed)
 
 
-def fitted_code(decoder, states: list, steps: int, seed: int) -> np.ndarray:
-    """A shape code fitted to all of one object's SDF samples (``sdf.samples.StateData``), decoder frozen."""
+def fitted_code(loaded, states: list, steps: int, seed: int) -> np.ndarray:
+    """A shape code fitted to all of one object's SDF samples (``sdf.samples.StateData``), the decoder of
+    ``loaded`` (a ``LoadedDecoder``) frozen, under the code prior it was trained with."""
     from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
 
     obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
-    return fit_code(decoder, obs, CodeFitConfig(steps=steps, points_per_step=4096, seed=seed))[0]
+    cfg = CodeFitConfig(steps=steps, points_per_step=4096, code_weight=loaded.code_weight, seed=seed)
+    return fit_code(loaded.decoder, obs, cfg)[0]
 
 
 def _evaluate_state(loaded, code, obj_folder: Path, st, group: str, cfg, mesh_cfg, grasp_cfg) -> StateResult:

@@ -48,6 +48,15 @@ class LoadedDecoder:
     critic: GraspCritic | None = field(default=None, repr=False)
     """The grasp critic stored beside the checkpoint (:mod:`~centerart.models.grasp_critic`), if any."""
 
+    @property
+    def code_weight(self) -> float:
+        """The weight of the code prior the decoder was trained with (its ``train_config``; the default where it
+        recorded none): new shape codes are fitted under the same prior."""
+        from centerart.models.losses import LossConfig
+
+        loss = (self.meta.get("train_config") or {}).get("loss") or {}
+        return float(loss.get("code_weight", LossConfig.code_weight))
+
     def code(self, object_id: str) -> np.ndarray:
         if object_id not in self.codes:
             raise CenterArtError(
