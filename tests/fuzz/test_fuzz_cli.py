@@ -27,6 +27,7 @@ import torch
 
 from centerart.cli import main
 from centerart.models.checkpoint import default_checkpoint
+from centerart.models.grasp_critic import critic_path
 
 from . import damage as d
 
@@ -160,6 +161,17 @@ def decoder_show(ckpt):
                 "--out", str(tmp / "out" / "x.png"), "--states", "1", "--resolution", "16"]  # fmt: skip
 
     return build
+
+
+def with_critic(damage):
+    """The shipped decoder with its grasp critic beside it, the critic damaged."""
+
+    def write(fx, path: Path) -> Path:
+        shutil.copy(default_checkpoint(), path)
+        damage(Path(shutil.copy(critic_path(default_checkpoint()), critic_path(path))))
+        return path
+
+    return write
 
 
 def nocodes(fx, path: Path) -> Path:
@@ -389,6 +401,12 @@ CASES = [
     Case("ckpt-empty-decoder-show", decoder_show(damaged_decoder(d.empty)), "decoder.pt"),
     Case("ckpt-codes-wrong-shape", decoder_show(lambda fx, p: torch_file({**torch.load(default_checkpoint(),
          weights_only=True), "codes": torch.zeros(3)})(p)), "decoder.pt"),
+    Case("critic-random-decoder-show", decoder_show(with_critic(d.random_bytes)), "decoder.pt.critic.json"),
+    Case("critic-truncated-decoder-show", decoder_show(with_critic(d.truncate)), "decoder.pt.critic.json"),
+    Case("critic-nan-weights-decoder-show", decoder_show(with_critic(lambda p: d.set_json(p, ["weights", 0], "nan"))),
+         "decoder.pt.critic.json"),
+    Case("critic-of-another-decoder-show", decoder_show(with_critic(lambda p: d.set_json(p, ["info",
+         "decoder_sha256"], "0" * 64))), "decoder.pt.critic.json"),
     Case("ckpt-random-predict-encoder", predict(encoder=copied("encoder.pt", d.random_bytes)), "encoder.pt"),
     Case("ckpt-truncated-predict-encoder", predict(encoder=copied("encoder.pt", d.truncate)), "encoder.pt"),
     Case("ckpt-lightning-truncated", train_decoder(ckpt=shipped_decoder(d.truncate)), "last.ckpt",
