@@ -35,7 +35,7 @@ RESOURCE_KEYS = frozenset(
 )
 #: Fields added to stage configs after recipe runs were recorded, with the value those runs implicitly used: a
 #: record without the field matches a plan that holds that value (older runs stay resumable).
-ADDED_FIELDS = {"variety": "classic", "ir_shading": "full"}
+ADDED_FIELDS = {"variety": "classic", "ir_shading": "full", "code_weight": 1e-4}
 FOLLOW_POLL_S = 5.0
 
 

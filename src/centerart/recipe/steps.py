@@ -151,7 +151,7 @@ def plan_decoder(cfg: RecipeConfig, p: Paths) -> dict[str, Any]:
     d = cfg.decoder
     fields = {k: getattr(d, k) for k in (
         "preset", "epochs", "batch_items", "points_per_item", "min_items_per_epoch", "max_points_per_state",
-        "lr_decoder", "lr_codes", "heldout_object_fraction", "heldout_states_per_object", "val_every",
+        "lr_decoder", "lr_codes", "code_weight", "heldout_object_fraction", "heldout_states_per_object", "val_every",
         "val_code_fit_steps")}  # fmt: skip
     return {"decoder": TrainDecoderConfig(data=p.sdf, out=p.decoder, **fields, **_training(cfg, d.threads))}
 
