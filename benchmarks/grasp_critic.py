@@ -64,18 +64,21 @@ def collect(args) -> dict:
             ok = execute_grasps(obj, q, g.poses, args.top_k)
             rows.append({"u": u, "chamfer_mm": chamfer, "fscore": fscore, "scores": g.scores.tolist(),
                          "features": g.features.tolist(), "ok": ok})  # fmt: skip
-        atomic_write_json(path, {"object_id": oid, "checkpoint": str(loaded.path), "states": rows})
+        atomic_write_json(path, {"object_id": oid, "checkpoint": str(loaded.path), "feature_names": GRASP_FEATURES,
+                                 "states": rows})  # fmt: skip
         print(f"{oid}: top-1 {[r['ok'][:1] for r in rows]}", flush=True)
     return {"objects": len(by_object), "out": str(args.out)}
 
 
 def load_rows(folder: Path) -> list[dict]:
-    """Per (object, state): object_id, u, features (K, F), scores (K,), ok (K,) bool."""
+    """Per (object, state): object_id, u, features (K, F) in ``GRASP_FEATURES`` order (picked by the names the
+    file was collected with), scores (K,), ok (K,) bool."""
     rows = []
     for path in sorted(Path(folder).glob("*.json")):
         d = json.loads(path.read_text())
+        columns = [d["feature_names"].index(name) for name in GRASP_FEATURES]
         for r in d["states"]:
-            f = np.asarray(r["features"], float).reshape(-1, len(GRASP_FEATURES))
+            f = np.asarray(r["features"], float).reshape(-1, len(d["feature_names"]))[:, columns]
             rows.append({"object_id": d["object_id"], "u": r["u"], "features": f,
                          "scores": np.asarray(r["scores"], float), "ok": np.asarray(r["ok"], bool)})  # fmt: skip
     return rows

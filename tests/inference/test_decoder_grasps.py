@@ -113,8 +113,8 @@ def test_shell_points_find_grasps_whose_tcp_is_off_the_surface():
 
 def test_features_describe_each_grasp_and_a_critic_ranks_by_them():
     """Every returned grasp carries its features (joint code, clearance within the check's margin, a positive joint
-    SDF change on the moving door); a critic that only rewards approaching the front face reorders the same
-    grasps by that feature, and its probabilities become the scores."""
+    SDF change on the moving door, its approach); a critic that only rewards approaching the front face reorders
+    the same grasps by that feature, and its probabilities become the scores."""
     from centerart.models.grasp_critic import GRASP_FEATURES, GraspCritic
 
     dec, cfg, u = ExactCabinetDecoder(BoxCabinet()), GraspExtractionConfig(), 0.6
@@ -123,7 +123,6 @@ def test_features_describe_each_grasp_and_a_critic_ranks_by_them():
     col = {name: plain.features[:, i] for i, name in enumerate(GRASP_FEATURES)}
     assert np.allclose(col["joint"], u) and (col["clearance_m"] > -cfg.geometry.clearance_m).all()
     assert (col["joint_sdf_change_m"] > cfg.moving_sdf_change).all()
-    assert np.allclose(np.exp(col["log_support"]) - 1, plain.support)
     assert np.allclose(col["approach_front"], -plain.poses[:, 0, 2])
     w = np.zeros(len(GRASP_FEATURES))
     w[GRASP_FEATURES.index("approach_front")] = 5.0

@@ -143,7 +143,6 @@ def extract_grasps(
     clearance, between = gripper_clearance(sdf_fn, poses), material_between_pads(sdf_fn, poses)
     features = np.stack(
         [
-            np.log1p(support[c]),
             off[c],
             tcp_sdf[c],
             change[c],

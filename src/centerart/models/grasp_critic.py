@@ -26,7 +26,6 @@ FORMAT = "centerart-grasp-critic"
 VERSION = 1
 
 GRASP_FEATURES = (
-    "log_support",
     "offset_m",
     "tcp_sdf_m",
     "joint_sdf_change_m",
@@ -35,12 +34,15 @@ GRASP_FEATURES = (
     "approach_front",
     "joint",
 )
-"""What the extraction knows of each grasp (object frame, metres): log(1 + agreeing candidates); |predicted
-offset|; predicted SDF at the TCP; how much the SDF at the TCP changes when the joint moves by the extraction's
-``moving_delta`` (large far from a hinge, where a pull has leverage); the open gripper's least SDF
-(``inference.grasp_geometry.gripper_clearance``); the least SDF where the closing pads sweep (negative: they close
-on decoded material; ``inference.grasp_geometry.material_between_pads``); the approach direction's component
-towards the front face (-x of the object frame: 1 is straight at the front); the normalized joint code."""
+"""What the extraction knows of each grasp (object frame, metres): |predicted offset|; predicted SDF at the TCP;
+how much the SDF at the TCP changes when the joint moves by the extraction's ``moving_delta`` (large far from a
+hinge, where a pull has leverage); the open gripper's least SDF (``inference.grasp_geometry.gripper_clearance``);
+the least SDF where the closing pads sweep (negative: they close on decoded material;
+``inference.grasp_geometry.material_between_pads``); the approach direction's component towards the front face
+(-x of the object frame: 1 is straight at the front); the normalized joint code. None depends on how densely the
+surface was sampled: the number of agreeing candidates, which does (the predictor's 48-cell lattice gives a
+fraction of the 128-cell one's), was left out after a critic that weighed it ranked a training fridge's grasps
+off its door at 48 cells."""
 
 
 @dataclass(frozen=True)
