@@ -78,7 +78,8 @@ def write_outputs(tmp: Path, predictor, preds, rgb, depth, camera, cfg: PredictC
 
     from centerart.geometry.camera import backproject_depth
     from centerart.inference.prediction_io import predictions_record
-    from centerart.models.encoder.checkpoint import file_sha256
+    from centerart.models.checkpoint_files import file_sha256
+    from centerart.models.grasp_critic import critic_record
     from centerart.utils.atomic import atomic_write_json
     from centerart.viz.prediction_overlay import draw_prediction
     from centerart.viz.scene_export import build_scene, write_glb
@@ -104,6 +105,7 @@ def write_outputs(tmp: Path, predictor, preds, rgb, depth, camera, cfg: PredictC
     checkpoints = {
         "encoder": {"path": str(enc), "sha256": file_sha256(enc)},
         "decoder": {"path": str(dec), "sha256": file_sha256(dec)},
+        "grasp_critic": critic_record(dec) if cfg.predictor.grasp_critic else None,
     }
     files = {
         "inputs": {"rgb": "rgb.png", "depth": "depth.npy", "points": "points.ply", **sources},

@@ -15,6 +15,9 @@ from centerart.cli import main
 from centerart.evaluation.scene_eval import EvalScenesConfig, evaluate_scenes, job_config, scene_context
 from centerart.evaluation.scene_summary import group_summary, stage_losses
 from centerart.evaluation.trials import execute_grasp, oracle_trial
+from centerart.models.checkpoint import default_checkpoint
+from centerart.models.checkpoint_files import file_sha256
+from centerart.models.grasp_critic import critic_path
 from centerart.scenes.description import SceneDescription
 
 
@@ -119,6 +122,8 @@ def test_resumed_run_equals_uninterrupted_and_the_report_is_complete(single_data
         assert heading in md, heading
     assert (full / "plots" / "sr_by_category.png").is_file() and (full / "plots" / "nearest_label.png").is_file()
     assert report["held_out"] and report["scenes_evaluated"] == 2 and not report["scenes_missing"]
+    critic = report["checkpoints"]["grasp_critic"]  # the shipped decoder's critic ranked the grasps: recorded
+    assert critic["sha256"] == file_sha256(critic_path(default_checkpoint())) and critic["sha256"][:12] in md
     methods = {k.split("|")[1] for k in report["groups"]}
     assert methods == {"centerart", "baseline", "oracle"}
     assert report["groups"][next(k for k in report["groups"] if "|oracle|" in k)]["sr"] >= 0.5

@@ -248,10 +248,12 @@ RECORD_SETTINGS = ("encoder", "decoder", "depth", "refine", "shape_prior", "orac
 
 def check_same_settings(out: Path, jc: dict) -> None:
     """Refuse to resume into ``out`` with settings that would mix records of two different evaluations."""
-    from centerart.models.encoder.checkpoint import file_sha256
+    from centerart.models.checkpoint_files import file_sha256
+    from centerart.models.grasp_critic import critic_record
 
     settings = {k: jc[k] for k in RECORD_SETTINGS}
     settings["checkpoint_sha256"] = [file_sha256(Path(jc["encoder"])), file_sha256(Path(jc["decoder"]))]
+    settings["grasp_critic"] = critic_record(Path(jc["decoder"]))  # it ranks the grasps: part of what is measured
     path = out / "settings.json"
     if path.is_file():
         before = json.loads(path.read_text())

@@ -12,7 +12,8 @@ from centerart.evaluation import baseline, trials
 from centerart.evaluation.metrics import thresholds as metric_thresholds
 from centerart.evaluation.scene_summary import summarize_records
 from centerart.grasps.generate import protocol_constants
-from centerart.models.encoder.checkpoint import file_sha256
+from centerart.models.checkpoint_files import file_sha256
+from centerart.models.grasp_critic import critic_record
 from centerart.training import encoder_metrics
 from centerart.utils.atomic import atomic_write_bytes, atomic_write_json
 
@@ -83,7 +84,8 @@ def write_report(out: Path, job_cfg: dict, sets: dict[str, list[Path]], testset:
     report = {
         "config": job_cfg,
         "code_version": code_version(),
-        "checkpoints": {k: {"path": job_cfg[k], "sha256": file_sha256(Path(job_cfg[k]))} for k in CHECKPOINTS},
+        "checkpoints": {k: {"path": job_cfg[k], "sha256": file_sha256(Path(job_cfg[k]))} for k in CHECKPOINTS}
+        | {"grasp_critic": critic_record(Path(job_cfg["decoder"]))},
         "seed": job_cfg["seed"],
         "held_out": testset["held_out"],
         "training_overlap": testset["training_overlap"],
@@ -197,6 +199,14 @@ def abort_lines(report: dict) -> list[str]:
     return lines
 
 
+def _critic_words(report: dict) -> str:
+    """Which grasp critic ranked the grasps (reports made before critics say nothing: none was used)."""
+    critic = report["checkpoints"].get("grasp_critic")
+    if critic is None:
+        return "no grasp critic (grasps ranked by the decoder's agreement confidence)"
+    return f"grasp critic {Path(critic['path']).name} (sha256 {critic['sha256'][:12]})"
+
+
 def markdown(report: dict) -> str:
     th = report["thresholds"]
     ex = th["executor"]
@@ -211,7 +221,7 @@ def markdown(report: dict) -> str:
         "",
         *warning,
         f"Code {report['code_version']}; encoder {Path(enc['path']).name} (sha256 {enc['sha256'][:12]}), decoder "
-        f"{Path(dec['path']).name} (sha256 {dec['sha256'][:12]}); "
+        f"{Path(dec['path']).name} (sha256 {dec['sha256'][:12]}), {_critic_words(report)}; "
         f"{report['scenes_evaluated']} scenes, {report['images']} images"
         + (f"; **{len(report['scenes_missing'])} scenes not evaluated yet**" if report["scenes_missing"] else "")
         + (

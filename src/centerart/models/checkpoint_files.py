@@ -8,12 +8,18 @@ kept: only the error's type.
 
 from __future__ import annotations
 
+import hashlib
 import io
 from pathlib import Path
 
 import torch
 
 from centerart.errors import CenterArtError
+
+
+def file_sha256(path: Path) -> str:
+    """The SHA-256 of a file's bytes (hex): how reports and linked files name the exact checkpoint they used."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def write_blob(path: Path, blob: dict) -> Path:

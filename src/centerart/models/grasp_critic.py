@@ -13,7 +13,6 @@ checkpoint's SHA-256, and read without running code; a critic of another checkpo
 
 from __future__ import annotations
 
-import hashlib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from centerart.errors import CenterArtError
+from centerart.models.checkpoint_files import file_sha256
 
 FORMAT = "centerart-grasp-critic"
 VERSION = 1
@@ -126,8 +126,10 @@ def critic_path(checkpoint: Path) -> Path:
     return checkpoint.with_name(checkpoint.name + ".critic.json")
 
 
-def file_sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+def critic_record(checkpoint: Path) -> dict | None:
+    """``{"path", "sha256"}`` of the critic beside ``checkpoint`` for reports and manifests (None: there is none)."""
+    path = critic_path(checkpoint)
+    return {"path": str(path), "sha256": file_sha256(path)} if path.is_file() else None
 
 
 def save_critic(critic: GraspCritic, checkpoint: Path) -> Path:

@@ -10,12 +10,11 @@ so :func:`load_encoder` refuses a different decoder with a clear error.
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from centerart.errors import CenterArtError
-from centerart.models.checkpoint_files import check_fields, read_blob, write_blob
+from centerart.models.checkpoint_files import check_fields, file_sha256, read_blob, write_blob
 from centerart.models.encoder.config import EncoderConfig
 from centerart.models.encoder.network import RGBDEncoder
 
@@ -31,10 +30,6 @@ class LoadedEncoder:
     path: Path
     decoder_sha256: str
     meta: dict = field(default_factory=dict, repr=False)
-
-
-def file_sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def save_encoder(
