@@ -54,12 +54,12 @@ def start_codes_by_fit(decoder, obs: Observations, codes: np.ndarray, points: in
 
 
 def fit_variant(
-    decoder, obs: Observations, ranked: np.ndarray | None, name: str, seed: int
+    decoder, obs: Observations, ranked: np.ndarray | None, name: str, seed: int, code_weight: float
 ) -> tuple[np.ndarray, float]:
     """(code, final data loss) of one variant (see the module doc); ``ranked``: the training codes best first
-    (``start_codes_by_fit``), needed by the ``best`` variants."""
+    (``start_codes_by_fit``), needed by the ``best`` variants; ``code_weight``: the decoder's trained code prior."""
     start, steps = name.split("_")
-    cfg = CodeFitConfig(steps=int(steps), points_per_step=4096, seed=seed)
+    cfg = CodeFitConfig(steps=int(steps), points_per_step=4096, code_weight=code_weight, seed=seed)
     if start == "zero":
         code, _, loss = fit_code(decoder, obs, cfg)
         return code, loss
@@ -82,7 +82,7 @@ def object_rows(loaded, folder: Path, states: list, variants: list[str], train_c
     rows = []
     for name in variants:
         t0 = time.perf_counter()
-        code, loss = fit_variant(loaded.decoder, obs, ranked, name, seed)
+        code, loss = fit_variant(loaded.decoder, obs, ranked, name, seed, loaded.code_weight)
         seconds = time.perf_counter() - t0 + (0.0 if name.startswith("zero") else rank_seconds)
         for kind, u in STATES.items():
             recon = reconstruct_object(loaded.decoder, code, u, loaded.bounds, MeshConfig(resolution=128))
