@@ -20,6 +20,9 @@ All poses are TCP poses (``grasps/gripper.py``) in the object's canonical frame,
 4. Non-maximum suppression (greedy by confidence; suppress within ``nms_distance`` and ``nms_angle_deg``) to
    ``check_pool`` x ``top_k`` grasps, which are checked on the decoded SDF (:mod:`~.grasp_geometry`: the open
    gripper must stay out of the predicted shape); the ``top_k`` best that pass, ranked by confidence.
+5. With a grasp critic (``models/grasp_critic.py``, fitted per checkpoint to physics outcomes): the grasps that
+   pass are ranked by its success probability instead, computed from what steps 1-4 know of each grasp
+   (``GRASP_FEATURES``); the probability becomes the score.
 """
 
 from __future__ import annotations
@@ -31,7 +34,12 @@ import torch
 from scipy.spatial import cKDTree
 
 from centerart.grasps.gripper import FLIP_Z
-from centerart.inference.grasp_geometry import GeometryCheckConfig, gripper_clearance, material_between_pads
+from centerart.inference.grasp_geometry import (
+    GeometryCheckConfig,
+    clear_enough,
+    gripper_clearance,
+    material_between_pads,
+)
 from centerart.inference.reconstruction import Reconstruction, decoder_field
 from centerart.models.decoder import SGDFDecoder, decode_outputs
 from centerart.models.grasp_critic import GRASP_FEATURES, GraspCritic
@@ -153,7 +161,7 @@ def extract_grasps(
         ],
         1,
     )
-    ok = np.flatnonzero(clearance > -cfg.geometry.clearance_m) if cfg.geometry.enabled else np.arange(len(c))
+    ok = np.flatnonzero(clear_enough(clearance, cfg.geometry))
     scores = score[c]
     if critic is not None:
         scores = critic.probability(features)

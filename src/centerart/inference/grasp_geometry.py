@@ -54,7 +54,12 @@ def clear_grasps(
     (object-frame points (N, 3) -> predicted SDF (N,), metres, negative inside)."""
     if not cfg.enabled or len(poses) == 0:
         return np.ones(len(poses), bool)
-    return gripper_clearance(sdf_fn, poses) > -cfg.clearance_m
+    return clear_enough(gripper_clearance(sdf_fn, poses), cfg)
+
+
+def clear_enough(clearance: np.ndarray, cfg: GeometryCheckConfig = GeometryCheckConfig()) -> np.ndarray:
+    """(K,) bool from grasps' :func:`gripper_clearance` (m): within the margin, or every one when the check is off."""
+    return clearance > -cfg.clearance_m if cfg.enabled else np.ones(len(clearance), bool)
 
 
 def closing_region_points() -> np.ndarray:
