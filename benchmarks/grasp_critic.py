@@ -10,6 +10,9 @@ one object set, measure its ranking and calibration on another. Prints JSON.
     # 3. on other objects: top-1 of the decoder's ranking against the critic's (within the executed 10) and the
     #    calibration of both scores
     python benchmarks/grasp_critic.py evaluate --rows test
+    # the predictor's 48-cell lattice (its grasps come from a coarser reconstruction)
+    python benchmarks/grasp_critic.py collect --objects test_objects --sdf test_sdf --states 0,1 --resolution 48 \
+        --out test48
 
 A state's top-1 is the first grasp of a ranking, a failure when the state has no grasp (missing counts).
 """
@@ -58,7 +61,7 @@ def collect(args) -> dict:
         rows = []
         for u in states:
             q = obj.denormalize(u)
-            recon = reconstruct_object(loaded.decoder, code, u, loaded.bounds, MeshConfig(resolution=128))
+            recon = reconstruct_object(loaded.decoder, code, u, loaded.bounds, MeshConfig(resolution=args.resolution))
             chamfer, fscore = chamfer_fscore(recon.mesh, obj.watertight_mesh(q))
             g = extract_grasps(loaded.decoder, code, u, recon, cfg)
             ok = execute_grasps(obj, q, g.poses, args.top_k)
@@ -183,6 +186,7 @@ def main() -> None:
     ap.add_argument("--states", default="0,0.5,1", help="normalized joint codes (collect)")
     ap.add_argument("--top-k", type=int, default=10)
     ap.add_argument("--fit-steps", type=int, default=200)
+    ap.add_argument("--resolution", type=int, default=128, help="lattice cells of the reconstruction (predictor: 48)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--save", action="store_true", help="fit: write the critic beside the checkpoint")
     ap.add_argument("--threads", type=int, default=1)
