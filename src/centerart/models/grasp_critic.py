@@ -41,8 +41,7 @@ the least SDF where the closing pads sweep (negative: they close on decoded mate
 ``inference.grasp_geometry.material_between_pads``); the approach direction's component towards the front face
 (-x of the object frame: 1 is straight at the front); the normalized joint code. None depends on how densely the
 surface was sampled: the number of agreeing candidates, which does (the predictor's 48-cell lattice gives a
-fraction of the 128-cell one's), was left out after a critic that weighed it ranked a training fridge's grasps
-off its door at 48 cells."""
+fraction of the 128-cell one's), is left out, so a critic fitted at 128 cells serves the predictor too."""
 
 
 @dataclass(frozen=True)
