@@ -69,9 +69,10 @@ def test_saved_beside_its_checkpoint_and_refused_for_another(tmp_path):
     [
         (lambda d: d.update(format="x"), "not a centerart grasp critic"),
         (lambda d: d.update(features=d["features"][:-1]), "features"),
-        (lambda d: d.update(weights=[float("nan")] * F), "finite"),
+        (lambda d: d.update(weights=[float("nan")] * F), "weights: holds NaN"),
+        (lambda d: d.update(mean=[0.0] * (F - 1)), "mean: expected a 7 array"),
         (lambda d: d.update(scale=[0.0] * F), "positive"),
-        (lambda d: d.pop("bias"), "damaged"),
+        (lambda d: d.pop("bias"), "damaged grasp critic \\(bias: missing"),
     ],
 )
 def test_damaged_critic_is_one_clear_error(change, message):

@@ -21,6 +21,7 @@ import numpy as np
 
 from centerart.errors import CenterArtError
 from centerart.models.checkpoint_files import file_sha256
+from centerart.utils.json_schema import array, json_problem
 
 FORMAT = "centerart-grasp-critic"
 VERSION = 1
@@ -42,6 +43,10 @@ the least SDF where the closing pads sweep (negative: they close on decoded mate
 (-x of the object frame: 1 is straight at the front); the normalized joint code. None depends on how densely the
 surface was sampled: the number of agreeing candidates, which does (the predictor's 48-cell lattice gives a
 fraction of the 128-cell one's), is left out, so a critic fitted at 128 cells serves the predictor too."""
+
+
+_N = len(GRASP_FEATURES)
+_SCHEMA = {"mean": array(_N), "scale": array(_N), "weights": array(_N), "bias": float, "info?": dict}
 
 
 @dataclass(frozen=True)
@@ -76,22 +81,19 @@ class GraspCritic:
 
     @classmethod
     def from_dict(cls, d: dict, source: str = "grasp critic") -> GraspCritic:
-        """The critic of :meth:`to_dict`; a wrong format, feature list or non-finite number names ``source``."""
+        """The critic of :meth:`to_dict`; a wrong format, feature list, field (``utils.json_schema``: finite numbers
+        of the right shapes) or a scale that is not positive is one :class:`CenterArtError` naming ``source``."""
         if not isinstance(d, dict) or d.get("format") != FORMAT or d.get("version") != VERSION:
             raise CenterArtError(f"{source}: not a centerart grasp critic (expected format {FORMAT!r} v{VERSION})")
         if d.get("features") != list(GRASP_FEATURES):
             raise CenterArtError(f"{source}: features {d.get('features')} differ from {list(GRASP_FEATURES)}")
-        try:
-            arrays = [np.asarray(d[k], float) for k in ("mean", "scale", "weights")]
-            bias = float(d["bias"])
-        except (KeyError, TypeError, ValueError) as err:
-            raise CenterArtError(f"{source}: damaged grasp critic ({type(err).__name__}: {err})") from None
-        n = len(GRASP_FEATURES)
-        if any(a.shape != (n,) or not np.isfinite(a).all() for a in arrays) or not np.isfinite(bias):
-            raise CenterArtError(f"{source}: grasp critic needs {n} finite means, scales and weights")
-        if (arrays[1] <= 0).any():
+        problem = json_problem(d, _SCHEMA)
+        if problem:
+            raise CenterArtError(f"{source}: damaged grasp critic ({problem})")
+        mean, scale, weights = (np.asarray(d[k], float) for k in ("mean", "scale", "weights"))
+        if (scale <= 0).any():
             raise CenterArtError(f"{source}: grasp critic scales must be positive")
-        return cls(*arrays, bias, dict(d.get("info") or {}))
+        return cls(mean, scale, weights, float(d["bias"]), dict(d.get("info") or {}))
 
 
 def fit_critic(features: np.ndarray, outcomes: np.ndarray, l2: float = 1.0, info: dict | None = None) -> GraspCritic:
