@@ -91,10 +91,14 @@ def stacked(rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([r["features"] for r in rows]), np.concatenate([r["ok"] for r in rows])
 
 
+def first_succeeds(row: dict, rank) -> bool:
+    """Whether a state's first grasp under ``rank(row) -> order`` succeeded (no grasp: a failure)."""
+    return bool(len(row["ok"])) and bool(row["ok"][rank(row)[0]])
+
+
 def top1(rows: list[dict], rank) -> dict:
-    """Success of each state's first grasp under ``rank(row) -> order`` (no grasp: a failure), overall and by
-    state (u)."""
-    hits = [bool(len(r["ok"])) and bool(r["ok"][rank(r)[0]]) for r in rows]
+    """Success of each state's first grasp under ``rank`` (:func:`first_succeeds`), overall and by state (u)."""
+    hits = [first_succeeds(r, rank) for r in rows]
     by_u = {}
     for u in sorted({r["u"] for r in rows}):
         by_u[str(u)] = float(np.mean([h for h, r in zip(hits, rows, strict=True) if r["u"] == u]))
@@ -141,8 +145,7 @@ def cross_validate(rows: list[dict], l2: float) -> dict:
         x, y = stacked(held)
         probs.append(critic.probability(x))
         ys.append(y)
-        rank = by_critic(critic)
-        hits += [bool(len(r["ok"])) and bool(r["ok"][rank(r)[0]]) for r in held]
+        hits += [first_succeeds(r, by_critic(critic)) for r in held]
     cal = score_calibration(np.concatenate(probs), np.concatenate(ys))
     return {"l2": l2, "top1_critic": float(np.mean(hits)), "ece": cal["ece"], "brier": cal["brier"],
             "auroc": cal["auroc"]}  # fmt: skip
