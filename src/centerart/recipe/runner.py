@@ -25,6 +25,7 @@ from typing import Any
 from centerart.errors import CenterArtError
 from centerart.recipe.config import STEPS, RecipeConfig
 from centerart.recipe.steps import STEP_TABLE, Paths, step_folders
+from centerart.utils.checks import at_least
 from centerart.utils.folders import output_folder
 from centerart.utils.manifest import code_version, write_manifest
 from centerart.utils.parallel import init_ray, launcher_rank
@@ -107,6 +108,8 @@ def check_config(cfg: RecipeConfig) -> None:
         raise CenterArtError(f"--workers must be >= 1, got {cfg.workers}")
     if cfg.devices < 1 or cfg.num_nodes < 1:
         raise CenterArtError("--devices and --num-nodes must be >= 1")
+    # Checked here too: the decoder step's own check would only come after the data steps' minutes of work.
+    at_least("--decoder.code-weight", cfg.decoder.code_weight, 0.0)
     world = cfg.devices * cfg.num_nodes
     if cfg.strategy == "ddp" and world > 1 and not _launched_externally():
         # Lightning would start the other processes by re-running this command line: each would run the recipe.
