@@ -52,7 +52,8 @@ def collect(args) -> dict:
     for s in load_states(args.sdf, 30000, args.seed, progress=False):
         by_object.setdefault(s.object_id, []).append(s)
     args.out.mkdir(parents=True, exist_ok=True)
-    for oid in sorted(by_object):
+    shard, shards = (int(v) for v in args.shard.split("/"))
+    for oid in sorted(by_object)[shard::shards]:
         path = args.out / f"{oid}.json"
         if path.is_file():
             continue
@@ -193,6 +194,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--save", action="store_true", help="fit: write the critic beside the checkpoint")
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument(
+        "--shard", default="0/1", help="collect: K/N takes every N-th object from the K-th (one process per core)"
+    )
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     if args.command == "collect":
