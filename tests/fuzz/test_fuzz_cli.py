@@ -382,6 +382,8 @@ CASES = [
          "--batch-size"),
     Case("arg-recipe-workers-zero", plain("recipe", "--preset", "tiny", "--out", lambda fx, t: str(t / "out"),
          "--workers", "0"), "--workers"),
+    Case("arg-recipe-decoder-from-missing", plain("recipe", "--preset", "tiny", "--out", lambda fx, t: str(t / "out"),
+         "--decoder-from", lambda fx, t: str(t / "nowhere")), "--decoder-from"),
     Case("arg-recipe-code-weight-negative", plain("recipe", "--preset", "tiny", "--out", lambda fx, t: str(t / "out"),
          "--decoder.code-weight", "-1"), "--decoder.code-weight"),
     Case("arg-recipe-same-seeds", plain("recipe", "--preset", "tiny", "--out", lambda fx, t: str(t / "out"),

@@ -177,3 +177,40 @@ def test_tiny_decoder_trains_with_ddp_on_two_cpu_processes(tiny_run, tmp_path):
     for i, oid in enumerate(result["split"].train_objects):
         assert np.isfinite(codes[oid]).all()
         assert np.abs(codes[oid] - initial[i]).max() > 1e-3, oid
+
+
+def _data_steps_copied(run: Path, out: Path) -> None:
+    """``out`` holds ``run``'s data steps (folders and records), as regenerating them with its options would."""
+    import shutil
+
+    for name in ("objects", "test_objects", "grasps", "sdf"):
+        shutil.copytree(run / name, out / name)
+    m = _manifest(run)
+    m["steps"] = {k: v for k, v in m["steps"].items() if k in ("objects", "grasps", "sdf")}
+    (out / "manifest.json").write_text(json.dumps(m))
+
+
+def test_decoder_is_adopted_from_an_earlier_run_only_with_its_settings_and_objects(tiny_run, tmp_path):
+    """``--decoder-from``: a run on a machine that kept nothing but the repository takes the decoder trained in an
+    earlier session instead of training it again; other settings or other objects are refused, nothing written."""
+    from centerart.errors import CenterArtError
+    from centerart.recipe.adopt import check_training_objects
+
+    out = tmp_path / "later"
+    _data_steps_copied(tiny_run, out)
+    cfg = recipe_preset("tiny", out=out, workers=1, progress=False, until="decoder", decoder_from=tiny_run)
+    with pytest.raises(CenterArtError, match=r"--decoder-from .*other settings \(decoder.epochs: 3 -> 4\)"):
+        run_recipe(replace(cfg, decoder=replace(cfg.decoder, epochs=4)))
+    assert not (out / "decoder").exists() and "decoder" not in _manifest(out)["steps"]
+    with pytest.raises(CenterArtError, match="trained on other objects than"):
+        check_training_objects(tiny_run / "decoder/decoder.pt", tiny_run / "test_objects")
+
+    lines = []
+    run_recipe(cfg, echo=lines.append)
+    assert lines[-1].startswith(f"[4/7] decoder: adopted from {tiny_run.resolve()}"), lines
+    assert (out / "decoder/decoder.pt").read_bytes() == (tiny_run / "decoder/decoder.pt").read_bytes()
+    assert (out / "decoder/split.json").is_file() and not (out / "decoder/lightning").exists()
+    record = _manifest(out)["steps"]["decoder"]
+    assert record["adopted_from"] == str(tiny_run.resolve()) and record["status"] == "done"
+    assert {k: v for k, v in record.items() if k not in ("adopted_from", "adopted")} == _manifest(tiny_run)[
+        "steps"]["decoder"]  # fmt: skip

@@ -154,6 +154,9 @@ class RecipeConfig:
     strategy: Literal["auto", "ddp", "ddp_spawn"] = "auto"
     """Training strategy; auto: one process for one device, else ddp_spawn on one node and ddp across nodes."""
     progress: bool = True
+    decoder_from: Path | None = None
+    """Adopt the finished decoder of this earlier recipe run (its output folder, or a copy of its manifest.json and
+    decoder/) instead of training one: same decoder settings and same training objects required."""
     objects: ObjectsStep = field(default_factory=ObjectsStep)
     grasps: GraspsStep = field(default_factory=GraspsStep)
     sdf: SdfStep = field(default_factory=SdfStep)

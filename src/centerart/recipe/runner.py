@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from centerart.errors import CenterArtError
+from centerart.recipe.adopt import adopt_decoder, source_record
 from centerart.recipe.config import STEPS, RecipeConfig
 from centerart.recipe.steps import STEP_TABLE, Paths, step_folders
 from centerart.utils.checks import at_least
@@ -57,6 +58,9 @@ def run_recipe(cfg: RecipeConfig, echo=print) -> dict:
             label = f"[{i}/{len(STEPS)}] {name}"
             planned = step.plan(cfg, paths)
             record = usable_record(name, records, paths, planned)
+            if name == "decoder" and record is None and cfg.decoder_from is not None:
+                _adopt_decoder(cfg, paths, planned, records, manifest, label, echo)
+                continue
             if record and record["status"] == "done" and all(f.is_file() for f in step.outputs(planned)):
                 echo(f"{label}: finished earlier in {format_seconds(record['seconds'])}, skipped")
                 continue
@@ -71,6 +75,16 @@ def run_recipe(cfg: RecipeConfig, echo=print) -> dict:
 
             ray.shutdown()
     return records
+
+
+def _adopt_decoder(cfg: RecipeConfig, paths: Paths, planned: dict, records: dict, manifest: dict, label: str,
+                   echo) -> None:  # fmt: skip
+    """``--decoder-from``: the earlier run's decoder instead of training one (:mod:`centerart.recipe.adopt`)."""
+    changed = _differences(source_record(cfg.decoder_from)["configs"], comparable(planned, paths.out))
+    records["decoder"] = {**adopt_decoder(cfg.decoder_from, paths, changed), "adopted": _now()}
+    save_manifest(cfg, paths.out, manifest)
+    trained = format_seconds(records["decoder"].get("seconds", 0.0))
+    echo(f"{label}: adopted from {records['decoder']['adopted_from']} (trained there in {trained})")
 
 
 def _run_step(cfg: RecipeConfig, name: str, paths: Paths, planned: dict, records: dict, manifest: dict) -> float:
@@ -110,6 +124,8 @@ def check_config(cfg: RecipeConfig) -> None:
         raise CenterArtError("--devices and --num-nodes must be >= 1")
     # Checked here too: the decoder step's own check would only come after the data steps' minutes of work.
     at_least("--decoder.code-weight", cfg.decoder.code_weight, 0.0)
+    if cfg.decoder_from is not None:
+        source_record(cfg.decoder_from)  # a wrong folder is named before the data steps run
     world = cfg.devices * cfg.num_nodes
     if cfg.strategy == "ddp" and world > 1 and not _launched_externally():
         # Lightning would start the other processes by re-running this command line: each would run the recipe.
