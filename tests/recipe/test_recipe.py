@@ -14,7 +14,7 @@ import torch
 from centerart.assets.fingerprint import object_fingerprint
 from centerart.cli import main
 from centerart.recipe.config import STEPS, recipe_preset
-from centerart.recipe.runner import run_recipe
+from centerart.recipe.runner import format_seconds, run_recipe
 from centerart.recipe.steps import Paths, plan_decoder
 
 # Measured: two runs of one seed give bit-identical decoders on CPU (one torch thread, same data); the tolerance
@@ -117,7 +117,8 @@ def test_interrupted_recipe_resumes_through_ray_and_reproduces_the_first_run(
 
     lines = []
     run_recipe(replace(cfg, until="decoder", ray_address=None), echo=lines.append)
-    assert lines[0] == f"[1/{len(STEPS)}] objects: finished earlier in {first['objects']['seconds']:.1f} s, skipped"
+    shown = format_seconds(first["objects"]["seconds"])  # "1 min 10 s" where a slow machine took over a minute
+    assert lines[0] == f"[1/{len(STEPS)}] objects: finished earlier in {shown}, skipped"
     ran = [line.split(": ")[0] for line in lines[1:]]  # each step that ran prints "running" and "done in ..."
     assert ran == ["[2/7] grasps", "[2/7] grasps", "[3/7] sdf", "[3/7] sdf", "[4/7] decoder", "[4/7] decoder"]
     steps = _manifest(out)["steps"]
