@@ -66,14 +66,13 @@ def check_training_objects(checkpoint: Path, objects: Path) -> None:
         )
 
 
-def adopt_decoder(source: Path, paths: Paths, changed: list[str]) -> dict:
+def adopt_decoder(source: Path, record: dict, paths: Paths, changed: list[str]) -> dict:
     """Copy the source run's decoder into ``paths.decoder`` and return the record for this run's manifest.
 
-    ``changed``: the settings in which the source's decoder record differs from this run's plan (computed by the
-    runner, as for resuming); any difference refuses the adoption.
+    ``record``: the source's decoder record (:func:`source_record`); ``changed``: the settings in which it differs
+    from this run's plan (computed by the runner, as for resuming); any difference refuses the adoption.
     """
     source = Path(source).resolve()
-    record = source_record(source)
     if changed:
         raise CenterArtError(
             f"{OPTION} {source}: its decoder was made with other settings ({', '.join(changed[:6])}); "

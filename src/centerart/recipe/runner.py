@@ -80,8 +80,9 @@ def run_recipe(cfg: RecipeConfig, echo=print) -> dict:
 def _adopt_decoder(cfg: RecipeConfig, paths: Paths, planned: dict, records: dict, manifest: dict, label: str,
                    echo) -> None:  # fmt: skip
     """``--decoder-from``: the earlier run's decoder instead of training one (:mod:`centerart.recipe.adopt`)."""
-    changed = _differences(source_record(cfg.decoder_from)["configs"], comparable(planned, paths.out))
-    records["decoder"] = {**adopt_decoder(cfg.decoder_from, paths, changed), "adopted": _now()}
+    source = source_record(cfg.decoder_from)
+    changed = _differences(source["configs"], comparable(planned, paths.out))
+    records["decoder"] = {**adopt_decoder(cfg.decoder_from, source, paths, changed), "adopted": _now()}
     save_manifest(cfg, paths.out, manifest)
     trained = format_seconds(records["decoder"].get("seconds", 0.0))
     echo(f"{label}: adopted from {records['decoder']['adopted_from']} (trained there in {trained})")
