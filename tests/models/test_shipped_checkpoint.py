@@ -63,6 +63,6 @@ def test_shipped_grasp_critic_belongs_to_the_shipped_decoder(shipped):
 def test_codes_are_fitted_under_the_prior_the_decoder_was_trained_with(shipped):
     from dataclasses import replace
 
-    assert shipped.code_weight == shipped.meta["train_config"]["loss"]["code_weight"] == 1e-4
-    assert replace(shipped, meta={"train_config": {"loss": {"code_weight": 0.01}}}).code_weight == 0.01
+    assert shipped.code_weight == shipped.meta["train_config"]["loss"]["code_weight"] == 1e-2  # since session 13
+    assert replace(shipped, meta={"train_config": {"loss": {"code_weight": 1e-4}}}).code_weight == 1e-4
     assert replace(shipped, meta={}).code_weight == 1e-4  # recorded none: the default

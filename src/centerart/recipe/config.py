@@ -61,7 +61,7 @@ class DecoderStep:
     lr_decoder: float = 1e-3
     lr_codes: float = 2e-3
     code_weight: float = 1e-2
-    """Weight of the code prior (``centerart train decoder --code-weight``; 1e-4 made the shipped files)."""
+    """Weight of the code prior (``centerart train decoder --code-weight``; the shipped files since session 13)."""
     heldout_object_fraction: float = 0.15
     """Share of the training objects held out of decoder training; their scenes validate the encoder."""
     heldout_states_per_object: int = 1
