@@ -1,11 +1,11 @@
 """Grasp critic: the probability that a decoded grasp succeeds in physics, from what the extraction knows of it.
 
 The decoder's own confidence (neighbour agreement x small offset, ``inference.decoder_grasps``) ranks grasps
-usefully but says little about success: on the shipped decoder's objects a score of 0.6 meant anything from 20 % to
-90 % (``weights/sgdf_small_eval.json``). The critic is a logistic regression over :data:`GRASP_FEATURES` (each
-standardized), fitted to physics outcomes of the decoder's own grasps on objects it was not trained on and that are
-not test objects (``benchmarks/grasp_critic.py``). Its probability becomes the grasp's score and its ranking; the
-same features and outcomes give its calibration.
+usefully but says little about success: on the 1e-4 decoder of sessions 8-12 a score of 0.6 meant anything from
+20 % to 90 % (``benchmarks/results/grasp_critic/``). The critic is a logistic regression over
+:data:`GRASP_FEATURES` (each standardized), fitted to physics outcomes of the decoder's own grasps on objects it
+was not trained on and that are not test objects (``benchmarks/grasp_critic.py``). Its probability becomes the
+grasp's score and its ranking; the same features and outcomes give its calibration.
 
 A critic belongs to one decoder: it is stored as JSON beside the checkpoint (:func:`critic_path`), with the
 checkpoint's SHA-256, and read without running code; a critic of another checkpoint is refused.

@@ -16,10 +16,13 @@ def _font(size: int):
         return ImageFont.load_default()
 
 
-def labelled(image: np.ndarray, text: str, size: int = 12) -> np.ndarray:
-    """Image with a dark caption bar at the top."""
+def labelled(image: np.ndarray, text: str, size: int = 12, min_size: int = 7) -> np.ndarray:
+    """Image with a dark caption bar at the top; a caption too long for the image gets a smaller font (down to
+    ``min_size`` px) rather than running past the edge into the next tile."""
     img = Image.fromarray(image)
     draw = ImageDraw.Draw(img)
+    while size > min_size and draw.textlength(text, font=_font(size)) > img.width - 8:
+        size -= 1
     draw.rectangle([0, 0, img.width, size + 6], fill=(20, 20, 20))
     draw.text((4, 2), text, fill=(240, 240, 240), font=_font(size))
     return np.asarray(img)
