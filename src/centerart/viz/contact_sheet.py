@@ -21,10 +21,12 @@ def labelled(image: np.ndarray, text: str, size: int = 12, min_size: int = 7) ->
     ``min_size`` px) rather than running past the edge into the next tile."""
     img = Image.fromarray(image)
     draw = ImageDraw.Draw(img)
-    while size > min_size and draw.textlength(text, font=_font(size)) > img.width - 8:
+    font = _font(size)
+    while size > min_size and draw.textlength(text, font=font) > img.width - 8:
         size -= 1
+        font = _font(size)
     draw.rectangle([0, 0, img.width, size + 6], fill=(20, 20, 20))
-    draw.text((4, 2), text, fill=(240, 240, 240), font=_font(size))
+    draw.text((4, 2), text, fill=(240, 240, 240), font=font)
     return np.asarray(img)
 
 
