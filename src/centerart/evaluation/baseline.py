@@ -14,18 +14,21 @@ from __future__ import annotations
 
 import numpy as np
 
+from centerart.geometry.planes import dominant_plane
+from centerart.inference.handles import (
+    CLUSTER_EPS_M,
+    CLUSTER_MIN_POINTS,
+    GRASP_DEPTH_M,
+    HANDLE_MAX_HEIGHT_M,
+    HANDLE_MIN_HEIGHT_M,
+    grasp_across,
+    handle_clusters,
+)
+
 #: RANSAC inlier distance (m) of the front-face plane.
 PLANE_DISTANCE_M = 0.01
 PLANE_ITERATIONS = 500
 PLANE_SAMPLE = 4000  # points the hypotheses are scored on
-#: Height band (m, along the face normal toward the camera) of handle points.
-HANDLE_MIN_HEIGHT_M = 0.015
-HANDLE_MAX_HEIGHT_M = 0.09
-#: DBSCAN radius (m) and minimum points of a handle cluster.
-CLUSTER_EPS_M = 0.02
-CLUSTER_MIN_POINTS = 15
-#: How far behind the handle's observed front surface (m) the TCP goes: about half a bar's thickness.
-GRASP_DEPTH_M = 0.01
 MAX_POINTS = 20_000
 MAX_GRASPS = 5
 
@@ -41,62 +44,9 @@ def thresholds() -> dict:
 
 
 def front_plane(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, float] | None:
-    """(unit normal toward the camera, offset d) with ``n . p + d = 0`` on the dominant plane, or None.
-
-    RANSAC written here rather than open3d's ``segment_plane``: that one runs its iterations in parallel and
-    returns slightly different planes from run to run even when seeded, and the evaluation's records must be
-    reproducible. All hypotheses are scored at once on a subsample, the winner is refit to its inliers."""
-    if len(points) < 50:
-        return None
-    rng = np.random.default_rng(seed)
-    sample = points if len(points) <= PLANE_SAMPLE else points[rng.choice(len(points), PLANE_SAMPLE, replace=False)]
-    tri = sample[rng.integers(0, len(sample), (PLANE_ITERATIONS, 3))]
-    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    length = np.linalg.norm(normals, axis=1)
-    keep = length > 1e-9
-    if not keep.any():
-        return None
-    normals = normals[keep] / length[keep, None]
-    offsets = -np.einsum("ij,ij->i", normals, tri[keep, 0])
-    counts = (np.abs(sample @ normals.T + offsets) < PLANE_DISTANCE_M).sum(axis=0)
-    best = int(np.argmax(counts))
-    inliers = points[np.abs(points @ normals[best] + offsets[best]) < PLANE_DISTANCE_M]
-    if len(inliers) < 30:
-        return None
-    centroid = inliers.mean(axis=0)
-    n = np.linalg.svd(inliers - centroid, full_matrices=False)[2][2]
-    if n @ centroid > 0:  # the camera is at the origin: face the normal toward it
-        n = -n
-    return n, float(-n @ centroid)
-
-
-def handle_clusters(points: np.ndarray, normal: np.ndarray, offset: float) -> list[np.ndarray]:
-    """Handle point clusters (each (M, 3)), largest first."""
-    import open3d as o3d
-
-    height = points @ normal + offset
-    candidates = points[(height > HANDLE_MIN_HEIGHT_M) & (height < HANDLE_MAX_HEIGHT_M)]
-    if len(candidates) < CLUSTER_MIN_POINTS:
-        return []
-    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(candidates))
-    labels = np.asarray(cloud.cluster_dbscan(CLUSTER_EPS_M, CLUSTER_MIN_POINTS))
-    clusters = [candidates[labels == k] for k in range(labels.max() + 1)] if len(labels) else []
-    return sorted(clusters, key=len, reverse=True)
-
-
-def grasp_across(cluster: np.ndarray, normal: np.ndarray) -> np.ndarray:
-    """TCP pose (4x4) closing the fingers across the cluster's long axis (in the face plane), approaching along
-    ``-normal``, GRASP_DEPTH_M behind the cluster's observed surface."""
-    centred = cluster - cluster.mean(axis=0)
-    in_plane = centred - np.outer(centred @ normal, normal)
-    _, _, vt = np.linalg.svd(in_plane, full_matrices=False)
-    z = -normal
-    x = vt[0] - (vt[0] @ z) * z
-    x /= np.linalg.norm(x)
-    pose = np.eye(4)
-    pose[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-    pose[:3, 3] = cluster.mean(axis=0) + z * GRASP_DEPTH_M
-    return pose
+    """(unit normal toward the camera, offset d) with ``n . p + d = 0`` on the object's dominant plane, or None
+    (:func:`centerart.geometry.planes.dominant_plane` at the baseline's RANSAC settings)."""
+    return dominant_plane(points, seed, PLANE_DISTANCE_M, PLANE_ITERATIONS, PLANE_SAMPLE)
 
 
 def baseline_grasps(points: np.ndarray, seed: int = 0) -> np.ndarray:

@@ -135,33 +135,20 @@ def extract_grasps(
     if len(idx) > cfg.max_candidates:  # the best-offset candidates; deterministic
         idx = idx[np.argsort(off_norm[idx], kind="stable")[: cfg.max_candidates]]
     pos, rot, off = points[idx] + offset[idx], out.rotation.numpy()[idx], off_norm[idx]
-    tcp_sdf, change = _joint_sdf_change(decoder, code, joint, pos, cfg, device)
+    tcp_sdf, change = joint_sdf_change(decoder, code, joint, pos, cfg.moving_delta, device)
     if cfg.require_moving:
         moving = change > cfg.moving_sdf_change
         pos, rot, off, tcp_sdf, change = pos[moving], rot[moving], off[moving], tcp_sdf[moving], change[moving]
         if len(pos) == 0:
             return _empty()
-    support = _support(pos, rot, cfg)
+    support = grasp_support(pos, rot, cfg)
     score = support / (support + cfg.support_half) * np.exp(-off / cfg.offset_scale)
-    c = _nms(pos, rot, score, cfg, cfg.top_k * (cfg.check_pool if cfg.geometry.enabled else 1))
+    c = nms_grasps(pos, rot, score, cfg, cfg.top_k * (cfg.check_pool if cfg.geometry.enabled else 1))
     poses = np.tile(np.eye(4), (len(c), 1, 1))
     poses[:, :3, :3] = rot[c]
     poses[:, :3, 3] = pos[c]
-    sdf_fn = _sdf_fn(decoder, code, joint, device)
-    clearance, between = gripper_clearance(sdf_fn, poses), material_between_pads(sdf_fn, poses)
-    features = np.stack(
-        [
-            off[c],
-            tcp_sdf[c],
-            change[c],
-            clearance,
-            between,
-            -rot[c][:, 0, 2],
-            np.full(len(c), joint),
-        ],
-        1,
-    )
-    ok = np.flatnonzero(clear_enough(clearance, cfg.geometry))
+    features = grasp_features(decoder, code, joint, poses, off[c], tcp_sdf[c], change[c], device)
+    ok = np.flatnonzero(clear_enough(features[:, GRASP_FEATURES.index("clearance_m")], cfg.geometry))
     scores = score[c]
     if critic is not None:
         scores = critic.probability(features)
@@ -170,7 +157,16 @@ def extract_grasps(
     return DecoderGrasps(poses[ok], scores[ok], support[c][ok], features[ok])
 
 
-def _support(pos: np.ndarray, rot: np.ndarray, cfg: GraspExtractionConfig) -> np.ndarray:
+def grasp_features(decoder, code, joint: float, poses, offset, tcp_sdf, change, device) -> np.ndarray:
+    """(K, len(GRASP_FEATURES)) what the grasp critic reads of TCP poses (K, 4, 4, object frame), given each
+    grasp's |predicted offset|, SDF at the TCP and joint SDF change (m; :func:`joint_sdf_change`)."""
+    sdf_fn = _sdf_fn(decoder, code, joint, device)
+    clearance, between = gripper_clearance(sdf_fn, poses), material_between_pads(sdf_fn, poses)
+    columns = [offset, tcp_sdf, change, clearance, between, -poses[:, 0, 2], np.full(len(poses), joint)]
+    return np.stack([np.asarray(c, float) for c in columns], 1).reshape(len(poses), len(GRASP_FEATURES))
+
+
+def grasp_support(pos: np.ndarray, rot: np.ndarray, cfg: GraspExtractionConfig) -> np.ndarray:
     """Per candidate: how many others predict a grasp within ``agree_distance`` whose rotation agrees."""
     tree = cKDTree(pos)
     support = np.zeros(len(pos), int)
@@ -183,7 +179,9 @@ def _support(pos: np.ndarray, rot: np.ndarray, cfg: GraspExtractionConfig) -> np
     return support
 
 
-def _nms(pos: np.ndarray, rot: np.ndarray, score: np.ndarray, cfg: GraspExtractionConfig, limit: int) -> np.ndarray:
+def nms_grasps(
+    pos: np.ndarray, rot: np.ndarray, score: np.ndarray, cfg: GraspExtractionConfig, limit: int
+) -> np.ndarray:
     """Indices of up to ``limit`` grasps, best score first, none within ``nms_distance`` and ``nms_angle_deg`` of
     a better one."""
     chosen: list[int] = []
@@ -222,12 +220,12 @@ def _query_points(decoder, code, joint, recon: Reconstruction, cfg: GraspExtract
     return np.concatenate([recon.points, shell]), np.concatenate([recon.sdf, sdf]), raw_all
 
 
-def _joint_sdf_change(decoder, code, joint, pos, cfg, device) -> tuple[np.ndarray, np.ndarray]:
-    """(predicted SDF at ``pos``, how much it changes (m) when the joint moves by +-``moving_delta``): a point on
-    the moving part changes, one on a static part does not."""
+def joint_sdf_change(decoder, code, joint, pos, moving_delta: float, device) -> tuple[np.ndarray, np.ndarray]:
+    """(predicted SDF at ``pos`` (N, 3, object frame), how much it changes (m) when the joint code moves by
+    +-``moving_delta``): a point on the moving part changes, one on a static part does not."""
     base = _sdf_fn(decoder, code, joint, device)(pos)
     change = np.zeros(len(pos))
-    for j in (joint - cfg.moving_delta, joint + cfg.moving_delta):
+    for j in (joint - moving_delta, joint + moving_delta):
         if 0.0 <= j <= 1.0:
             change = np.maximum(change, np.abs(_sdf_fn(decoder, code, j, device)(pos) - base))
     return np.asarray(base, float), change
