@@ -36,6 +36,14 @@ from centerart.utils.checks import at_least
 from centerart.utils.folders import check_output_folder
 
 REFINE_METHODS = {"none": "centerart", "icp": "centerart+icp", "sdf": "centerart+sdf"}
+#: Grasp settings of the learned method (``inference.grasp_anchoring.LADDER``); ``full`` is the predictor's default.
+GraspSetting = Literal["proposal", "checks", "snap", "square", "observed", "handle", "full"]
+
+
+def method_name(refine: str, grasps: str) -> str:
+    """The learned method's name in records and reports: ``centerart`` (+ refinement) with the grasp setting in
+    brackets unless it is the default (``full``)."""
+    return REFINE_METHODS[refine] + ("" if grasps == "full" else f"[{grasps}]")
 
 
 @dataclass
@@ -54,6 +62,10 @@ class EvalScenesConfig:
     """Depth modes: rendered true depth, and the realistic (stereo) depth the scenes were made with."""
     refine: tuple[Literal["none", "icp", "sdf"], ...] = ("none",)
     """Refinement settings of the learned method, each a row (sdf costs about 20 s per image on CPU)."""
+    grasps: tuple[GraspSetting, ...] = ("full",)
+    """Grasp settings of the learned method, each a row: ``full`` (the default: grasps made on, snapped to, checked
+    against and ranked on the observed points), ``proposal`` (the decoder's grasps alone), or a step between
+    (``inference.grasp_anchoring.anchoring_setting``)."""
     shape_prior: Literal["regressed", "nearest", "best_fit"] = "regressed"
     """The predictor's shape code: the encoder's regression, or snapped to a decoder training code
     (``inference.shape_prior``)."""
@@ -109,17 +121,19 @@ def list_scene_dirs(folder: Path, limit: int | None) -> list[Path]:
 _PREDICTORS: dict = {}
 
 
-def predictor_for(cfg: dict, refine: str):
-    """The predictor of one refinement setting, loaded once per process."""
+def predictor_for(cfg: dict, refine: str, grasps: str = "full"):
+    """The predictor of one refinement and grasp setting, loaded once per process."""
+    from centerart.inference.grasp_anchoring import anchoring_setting
     from centerart.inference.predictor import Predictor, PredictorConfig
     from centerart.inference.refinement import RefineConfig, SdfRefineConfig
 
-    key = (cfg["encoder"], cfg["decoder"], refine, cfg["shape_prior"])
+    key = (cfg["encoder"], cfg["decoder"], refine, grasps, cfg["shape_prior"])
     if key not in _PREDICTORS:
         config = PredictorConfig(
             refine=RefineConfig(icp=refine == "icp"),
             refine_sdf=SdfRefineConfig(enabled=refine == "sdf"),
             shape_prior=cfg["shape_prior"],
+            anchoring=anchoring_setting(grasps),
         )
         _PREDICTORS[key] = Predictor(cfg["encoder"], cfg["decoder"], config=config)
     return _PREDICTORS[key]
@@ -195,11 +209,12 @@ def evaluate_scene(scene_dir: Path, labels_dir: Path, cfg: dict) -> dict:
     try:
         for v in view_inputs(scene_dir, cfg["depth"]):
             for refine in cfg["refine"]:
-                method = REFINE_METHODS[refine]
-                ablation = cfg["ablation"] and refine == cfg["refine"][0]
-                r, image = learned_rows(ctx, v, predictor_for(cfg, refine), method, cfg["shape"], ablation)
-                rows += r
-                images.append(image)
+                for grasps in cfg.get("grasps", ("full",)):
+                    ablation = cfg["ablation"] and refine == cfg["refine"][0]
+                    predictor, method = predictor_for(cfg, refine, grasps), method_name(refine, grasps)
+                    r, image = learned_rows(ctx, v, predictor, method, cfg["shape"], ablation)
+                    rows += r
+                    images.append(image)
             if cfg["baseline"]:
                 rows += baseline_rows(ctx, v, cfg["seed"])
             if cfg["oracle"]:
@@ -242,8 +257,8 @@ def job_config(cfg: EvalScenesConfig) -> dict:
 
 
 #: Settings that change what a scene record holds; a rerun into the same --out must keep them.
-RECORD_SETTINGS = ("encoder", "decoder", "depth", "refine", "shape_prior", "oracle", "baseline", "shape", "ablation",
-                   "labels_per_state", "label_max_trials", "seed")  # fmt: skip
+RECORD_SETTINGS = ("encoder", "decoder", "depth", "refine", "grasps", "shape_prior", "oracle", "baseline", "shape",
+                   "ablation", "labels_per_state", "label_max_trials", "seed")  # fmt: skip
 
 
 def check_same_settings(out: Path, jc: dict) -> None:

@@ -23,6 +23,7 @@ from centerart.errors import CenterArtError
 from centerart.geometry.camera import Intrinsics, backproject_depth
 from centerart.inference.batched_decoder import run_batched
 from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_shape_and_grasps
+from centerart.inference.grasp_anchoring import AnchoredGrasps, AnchoringConfig, ObjectView, anchor_grasps
 from centerart.inference.grasp_filter import CollisionFilterConfig, collision_free
 from centerart.inference.inputs import check_inputs
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
@@ -47,6 +48,10 @@ class PredictorConfig:
     refine_sdf: SdfRefineConfig = field(default_factory=SdfRefineConfig)
     """Pose, shape code and joint code fitted to the observed depth through the decoder (before grasps)."""
     collision: CollisionFilterConfig = field(default_factory=CollisionFilterConfig)
+    """The proposal's own collision filter (used when anchoring is off)."""
+    anchoring: AnchoringConfig = field(default_factory=AnchoringConfig)
+    """Grasps made on, snapped to, checked against and ranked on the object's observed points
+    (:mod:`~centerart.inference.grasp_anchoring`); off: the decoder's grasps as they are (the proposal alone)."""
     shape_prior: Literal["regressed", "nearest", "best_fit"] = "regressed"
     """The shape code used: the encoder's regression as it is, or snapped to a training code of the decoder
     (nearest, or the nearby one whose surface fits the observed depth best; :mod:`~.shape_prior`)."""
@@ -84,6 +89,15 @@ class ObjectPrediction:
     mask: np.ndarray | None = field(default=None, repr=False)
     peak_uv: np.ndarray | None = None
     refinement: dict = field(default_factory=dict)
+    """What refinement and anchoring did (``anchoring``: candidates per source and survivors of each check)."""
+    grasp_sources: list[str] = field(default_factory=list)
+    """Where each grasp came from: ``decoder``, ``observed`` or ``handle`` (:mod:`~.grasp_anchoring`); empty
+    when anchoring is off (every grasp is the decoder's)."""
+    grasp_closing_points: np.ndarray | None = None
+    """(K,) observed points of the object between each grasp's pads (anchoring on), else None."""
+    rejected_grasps: np.ndarray | None = field(default=None, repr=False)
+    """(R, 4, 4) candidates the anchoring rejected (camera frame), with ``rejected_reasons`` (R,)."""
+    rejected_reasons: list[str] = field(default_factory=list)
     _mesher: object = field(default=None, repr=False)
 
     @property
@@ -109,6 +123,18 @@ def opening_directions(grasps_cam: np.ndarray, joint_type: str, axis_dir: np.nda
         return np.tile(axis_dir, (len(grasps_cam), 1))
     tangent = np.cross(axis_dir, grasps_cam[:, :3, 3] - axis_pt)
     return tangent / np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-9)
+
+
+def _anchoring_fields(anchored: AnchoredGrasps | None) -> dict:
+    """The ObjectPrediction fields that anchoring fills (none when it is off)."""
+    if anchored is None:
+        return {}
+    return {
+        "grasp_sources": anchored.sources,
+        "grasp_closing_points": anchored.closing_points,
+        "rejected_grasps": anchored.rejected_poses,
+        "rejected_reasons": anchored.rejected_reasons,
+    }
 
 
 class Predictor:
@@ -172,8 +198,9 @@ class Predictor:
         return camera, check_inputs(np.asarray(rgb), np.asarray(depth), camera)
 
     def _scene_tree(self, depth: np.ndarray, camera: Intrinsics) -> cKDTree | None:
-        """One search tree of the observed points for every object's grasp collision check (None: filter off)."""
-        return cKDTree(backproject_depth(depth, camera.K)) if self.config.collision.enabled else None
+        """One search tree of the observed points for every object's grasp collision check (None: no check on)."""
+        checks = self.config.collision.enabled or self.config.anchoring.enabled
+        return cKDTree(backproject_depth(depth, camera.K)) if checks else None
 
     def _tick(self, key: str, since: float) -> float:
         now = time.perf_counter()
@@ -211,8 +238,8 @@ class Predictor:
         SDF fit when it is on."""
         cfg = self.config
         code, joint, pose, info = det.shape_code.astype(np.float32), det.joint_code, det.camera_T_object, {}
-        refining = (cfg.refine_sdf.enabled or cfg.refine.icp or cfg.shape_prior == "best_fit") and det.mask is not None
-        observed = backproject_depth(depth, camera.K, mask=det.mask) if refining else None
+        uses = cfg.refine_sdf.enabled or cfg.refine.icp or cfg.shape_prior == "best_fit" or cfg.anchoring.enabled
+        observed = backproject_depth(depth, camera.K, mask=det.mask) if uses and det.mask is not None else None
         code = self._prior_code(code, joint, pose, observed, info)
         if cfg.refine_sdf.enabled and observed is not None:
             pose, code, joint, info["sdf"] = refine_sdf(
@@ -241,17 +268,21 @@ class Predictor:
         if cfg.refine.icp and observed is not None:
             pose, info["icp"] = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
         t = self._tick("refine_s", t)
-        grasps_cam = pose @ grasps.poses if len(grasps) else np.zeros((0, 4, 4))
-        scores = grasps.scores
-        if cfg.collision.enabled and len(grasps_cam):
-            keep = collision_free(grasps_cam, scene, cfg.collision)
-            grasps_cam, scores = grasps_cam[keep], scores[keep]
-        grasps_cam, scores = grasps_cam[: cfg.top_k_grasps], scores[: cfg.top_k_grasps]
-        self._tick("filter_s", t)
         # The axis moves with the refined pose (it was predicted relative to the object).
         delta = pose @ np.linalg.inv(det.camera_T_object)
         axis_point = delta[:3, :3] @ det.axis_point + delta[:3, 3]
         axis_direction = delta[:3, :3] @ det.axis_direction
+        grasps_cam = pose @ grasps.poses if len(grasps) else np.zeros((0, 4, 4))
+        anchored = None
+        if cfg.anchoring.enabled and observed is not None:
+            view = ObjectView(self.fast_decoder, code, joint, pose, observed, det.joint_type, axis_point,
+                              axis_direction, self.device)  # fmt: skip
+            critic = self.decoder.critic if cfg.grasp_critic else None
+            anchored = anchor_grasps(view, grasps_cam, scene, critic, cfg.anchoring, cfg.top_k_grasps)
+            grasps_cam, scores, info["anchoring"] = anchored.poses, anchored.scores, anchored.counts
+        else:
+            grasps_cam, scores = self._proposal_grasps(grasps_cam, grasps.scores, scene)
+        self._tick("filter_s", t)
         return ObjectPrediction(
             score=det.score,
             camera_T_object=pose,
@@ -269,7 +300,16 @@ class Predictor:
             peak_uv=det.peak_uv,
             refinement=info,
             _mesher=self._mesh,
+            **_anchoring_fields(anchored),
         )
+
+    def _proposal_grasps(self, grasps_cam: np.ndarray, scores: np.ndarray, scene) -> tuple[np.ndarray, np.ndarray]:
+        """The decoder's grasps (camera frame) through the proposal's collision filter, cut to ``top_k_grasps``."""
+        cfg = self.config
+        if cfg.collision.enabled and len(grasps_cam):
+            keep = collision_free(grasps_cam, scene, cfg.collision)
+            grasps_cam, scores = grasps_cam[keep], scores[keep]
+        return grasps_cam[: cfg.top_k_grasps], scores[: cfg.top_k_grasps]
 
     def meshes(self, preds: list[ObjectPrediction], resolution: int | None = None) -> list:
         """The complete mesh of every prediction (trimesh, camera frame), all objects decoded at once."""

@@ -1,0 +1,324 @@
+"""Grasps rooted in the observed depth: candidates made where the material is, verified and ranked on it.
+
+The decoder proposes; what the robot executes must agree with what the camera sees (ARCHITECTURE.md). Per
+detected object, with its observed points (its predicted mask back-projected, OpenCV camera frame, metres):
+
+1. Candidates (camera frame), from three sources:
+   - ``decoder``: the grasps decoded on the predicted surface (:mod:`~.decoder_grasps`), mapped with the pose;
+   - ``observed``: the SGDF queried at the object's observed points (and 1.5 / 3 cm in front of them along the
+     camera ray), mapped into its canonical frame: each point's predicted offset and rotation are a grasp, as the
+     field was trained to give (the nearest grasp to any point); this makes candidates where the camera saw
+     material even when the decoded shape is centimetres off;
+   - ``handle``: the grasp across each cluster of material standing proud of the object's front plane
+     (:mod:`~.handles`, the baseline's handle finder, on the predicted mask).
+   Each decoder / observed candidate also comes squared to the front plane (approach against its normal, closing
+   axis kept in the plane), since the regressed pose's rotation is 15-25 degrees off.
+2. Snap (:func:`~.observed_checks.snap_to_material`): each candidate is moved onto the observed material in front
+   of its pads, by a bounded shift along its approach and closing axes.
+3. Checks: the closing pads must sweep observed points of the object; the open fingers and palm must stay clear of
+   every observed point at the grasp and along the approach (:mod:`~.observed_checks`).
+4. Ranking: the grasp critic's physics success probability (its features read from the decoder at the grasp's
+   object-frame pose, the same features it was fitted on), times cues a person would use: material proud of the
+   front plane (a handle), leverage about the predicted hinge, and an approach from the camera's side.
+
+Every step is counted per object (``AnchoredGrasps.counts``), and the rejected candidates are kept with their
+reason for pictures.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from centerart.geometry.planes import dominant_plane
+from centerart.inference.decoder_grasps import (
+    GraspExtractionConfig,
+    grasp_features,
+    grasp_support,
+    joint_sdf_change,
+    nms_grasps,
+)
+from centerart.inference.handles import HANDLE_MAX_HEIGHT_M, grasp_across, handle_clusters
+from centerart.inference.observed_checks import (
+    ObservedCheckConfig,
+    closing_points,
+    collision_points,
+    snap_to_material,
+    to_tcp_frame,
+)
+from centerart.inference.reconstruction import decoder_field
+from centerart.models.decoder import decode_outputs
+
+SOURCES = ("decoder", "observed", "handle")
+
+
+@dataclass(frozen=True)
+class AnchoringConfig:
+    """Grasps made on, verified against and re-anchored to the observed points (module doc). On by default."""
+
+    enabled: bool = True
+    observed_candidates: bool = True
+    """Query the SGDF at the object's observed points for candidates (beside the decoded-surface ones)."""
+    handle_candidates: bool = True
+    """Grasp across material proud of the object's front plane (the baseline's handle finder) as candidates."""
+    square: bool = True
+    """Also try each decoder / observed candidate squared to the object's front plane."""
+    snap: bool = True
+    """Move candidates onto the observed material (bounded shift); off: check them where they are."""
+    checks: ObservedCheckConfig = field(default_factory=ObservedCheckConfig)
+    observed_queries: int = 1200
+    """Observed points (subsampled, seeded) at which the SGDF is queried."""
+    ray_steps_m: tuple[float, ...] = (0.0, 0.015, 0.03)
+    """Each query point also moved this far toward the camera (grasp centres sit in front of a closed door)."""
+    max_offset_m: float = 0.03
+    """An observed query whose predicted grasp is further away votes for none (the field means "elsewhere")."""
+    observed_pool: int = 40
+    """Observed candidates kept after non-maximum suppression."""
+    handle_weight: float = 1.0
+    """Rank factor 1 + w * (handle cue in [0, 1]): material 0.5-2 cm proud of the front plane between the pads."""
+    leverage_floor: float = 0.3
+    """Rank factor floor + (1 - floor) * r, r = distance from the predicted hinge / the object's largest (revolute)."""
+    facing_floor: float = 0.2
+    """Rank factor floor + (1 - floor) * cos, cos = how far the approach points away from the camera (>= 0)."""
+    seed: int = 0
+
+
+@dataclass
+class AnchoredGrasps:
+    """The kept grasps of one object (camera frame, ranked best first) and what happened to every candidate."""
+
+    poses: np.ndarray
+    scores: np.ndarray
+    sources: list[str]
+    closing_points: np.ndarray
+    """(K,) observed points of the object between each kept grasp's pads."""
+    rejected_poses: np.ndarray
+    rejected_reasons: list[str]
+    counts: dict = field(default_factory=dict)
+    """Candidates per source, and how many survived each step: snapped, material between the pads, clear."""
+
+
+@dataclass
+class ObjectView:
+    """What anchoring knows of one object: decoder inputs, pose, joint, and its observed points (camera frame)."""
+
+    decoder: object
+    code: np.ndarray
+    joint: float
+    camera_T_object: np.ndarray
+    observed: np.ndarray
+    joint_type: str
+    axis_point: np.ndarray
+    axis_direction: np.ndarray
+    device: object = "cpu"
+
+
+def observed_field_candidates(view: ObjectView, cfg: AnchoringConfig) -> np.ndarray:
+    """(C, 4, 4) camera-frame grasps the SGDF predicts at the object's observed points (module doc, source
+    ``observed``), on the moving part, non-maximum suppressed to ``observed_pool``."""
+    rng = np.random.default_rng(cfg.seed)
+    pts = view.observed
+    if len(pts) > cfg.observed_queries:
+        pts = pts[rng.choice(len(pts), cfg.observed_queries, replace=False)]
+    rays = pts / np.maximum(np.linalg.norm(pts, axis=1, keepdims=True), 1e-9)
+    queries = np.concatenate([pts - s * rays for s in cfg.ray_steps_m])
+    object_T_camera = np.linalg.inv(view.camera_T_object)
+    q = queries @ object_T_camera[:3, :3].T + object_T_camera[:3, 3]
+    sdf, raw = decoder_field(view.decoder, view.code, view.joint, device=view.device)(q.astype(np.float32))
+    out = decode_outputs(raw)
+    offset, rot = out.offset.numpy().astype(float), out.rotation.numpy().astype(float)
+    off = np.linalg.norm(offset, axis=1)
+    ext = GraspExtractionConfig()
+    keep = np.flatnonzero((off < cfg.max_offset_m) & (np.abs(sdf) < ext.surface_band))
+    if len(keep) == 0:
+        return np.zeros((0, 4, 4))
+    pos, rot, off = q[keep] + offset[keep], rot[keep], off[keep]
+    _, change = joint_sdf_change(view.decoder, view.code, view.joint, pos, ext.moving_delta, view.device)
+    moving = change > ext.moving_sdf_change
+    pos, rot, off = pos[moving], rot[moving], off[moving]
+    if len(pos) == 0:
+        return np.zeros((0, 4, 4))
+    support = grasp_support(pos, rot, ext)
+    chosen = nms_grasps(pos, rot, support / (support + ext.support_half) * np.exp(-off / ext.offset_scale), ext,
+                        cfg.observed_pool)  # fmt: skip
+    poses = np.tile(np.eye(4), (len(chosen), 1, 1))
+    poses[:, :3, :3], poses[:, :3, 3] = rot[chosen], pos[chosen]
+    return view.camera_T_object @ poses
+
+
+def squared_to_plane(poses: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """TCP poses (K, 4, 4) turned to approach along ``-normal`` (the front plane's normal, toward the camera),
+    keeping the closing axis' direction in the plane and the TCP where it was."""
+    out = poses.copy()
+    z = -np.asarray(normal, float)
+    for k, pose in enumerate(poses):
+        y = pose[:3, 1] - (pose[:3, 1] @ z) * z
+        if np.linalg.norm(y) < 1e-6:  # closing along the normal: any in-plane direction is as good
+            y = np.cross(z, [1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.cross(z, [0.0, 1.0, 0.0])
+        y /= np.linalg.norm(y)
+        out[k, :3, :3] = np.column_stack([np.cross(y, z), y, z])
+    return out
+
+
+def candidate_set(view: ObjectView, decoded_camera: np.ndarray, plane, cfg: AnchoringConfig):
+    """(poses (C, 4, 4), sources (C,)) of every candidate (module doc, step 1), camera frame."""
+    groups = {"decoder": np.asarray(decoded_camera, float).reshape(-1, 4, 4)}
+    groups["observed"] = observed_field_candidates(view, cfg) if cfg.observed_candidates else np.zeros((0, 4, 4))
+    if cfg.square and plane is not None:
+        for name in ("decoder", "observed"):
+            groups[name] = np.concatenate([groups[name], squared_to_plane(groups[name], plane[0])])
+    handles = handle_clusters(view.observed, *plane) if (cfg.handle_candidates and plane is not None) else []
+    groups["handle"] = np.array([grasp_across(c, plane[0]) for c in handles]).reshape(-1, 4, 4)
+    poses = np.concatenate([groups[s] for s in SOURCES])
+    sources = np.array([s for s in SOURCES for _ in range(len(groups[s]))], dtype=object)
+    return poses, sources
+
+
+def anchor_grasps(
+    view: ObjectView, decoded_camera: np.ndarray, scene_tree: cKDTree, critic, cfg: AnchoringConfig, top_k: int
+) -> AnchoredGrasps:
+    """The object's grasps made on, snapped to, checked against and ranked on its observed points (module doc).
+    ``decoded_camera``: the decoder's grasps (K, 4, 4, camera frame); ``scene_tree``: every observed point of the
+    image (camera frame); ``critic``: the decoder's grasp critic or None."""
+    observed = np.asarray(view.observed, float).reshape(-1, 3)
+    view.observed = observed
+    plane = dominant_plane(observed, cfg.seed) if len(observed) >= 50 else None
+    poses, sources = candidate_set(view, decoded_camera, plane, cfg) if len(observed) else (np.zeros((0, 4, 4)), [])
+    counts = {f"candidates_{s}": int(np.sum(np.asarray(sources) == s)) for s in SOURCES}
+    if len(poses) == 0:
+        return _result(poses, np.zeros(0), sources, np.zeros(0, int), [], counts, top_k)
+    object_tree = cKDTree(observed)
+    reasons = np.full(len(poses), "", dtype=object)
+    if cfg.snap:
+        snapped = [snap_to_material(p, object_tree, cfg.checks) for p in poses]
+        reasons[[s is None for s in snapped]] = "far_from_material"
+        poses = np.array([p if s is None else s for p, s in zip(poses, snapped, strict=True)])
+    ok = reasons == ""
+    counts["snapped"] = int(ok.sum())
+    between = np.zeros(len(poses), int)
+    between[ok] = closing_points(poses[ok], object_tree)
+    reasons[ok & (between < cfg.checks.min_closing_points)] = "no_material_between_pads"
+    ok = reasons == ""
+    counts["material_between_pads"] = int(ok.sum())
+    hits = np.zeros(len(poses), int)
+    hits[ok] = collision_points(poses[ok], scene_tree, cfg.checks)
+    reasons[ok & (hits > cfg.checks.max_collision_points)] = "collides_with_observed"
+    ok = reasons == ""
+    counts["clear"] = int(ok.sum())
+    scores = np.zeros(len(poses))
+    if ok.any():
+        scores[ok] = rank_scores(view, poses[ok], plane, object_tree, critic, cfg)
+    return _result(poses, scores, sources, between, list(reasons), counts, top_k)
+
+
+def _result(poses, scores, sources, between, reasons, counts, top_k: int = 0) -> AnchoredGrasps:
+    """Kept grasps (reason "") best first, deduplicated by the decoder extraction's NMS to ``top_k``; the rejected
+    ones aside with their reasons."""
+    reasons = np.asarray(reasons, dtype=object).reshape(-1)
+    kept = np.flatnonzero(reasons == "")
+    kept = kept[np.argsort(-scores[kept], kind="stable")]
+    if len(kept):
+        kept = kept[nms_grasps(poses[kept, :3, 3], poses[kept, :3, :3], scores[kept], GraspExtractionConfig(), top_k)]
+    rejected = np.flatnonzero(reasons != "")
+    counts["kept"] = len(kept)
+    poses = np.asarray(poses, float).reshape(-1, 4, 4)
+    return AnchoredGrasps(
+        poses=poses[kept],
+        scores=np.asarray(scores, float)[kept],
+        sources=[str(sources[i]) for i in kept],
+        closing_points=np.asarray(between)[kept],
+        rejected_poses=poses[rejected],
+        rejected_reasons=[str(reasons[i]) for i in rejected],
+        counts=counts,
+    )
+
+
+def rank_scores(view: ObjectView, poses: np.ndarray, plane, object_tree: cKDTree, critic, cfg: AnchoringConfig):
+    """(K,) ranking scores of checked grasps (camera frame): critic probability x handle, leverage and facing cues
+    (module doc, step 4); each cue's factor is documented on :class:`AnchoringConfig`."""
+    p = critic_probability(view, poses, critic)
+    handle = handle_cue(poses, plane, object_tree)
+    leverage = leverage_cue(view, poses)
+    rays = poses[:, :3, 3] / np.maximum(np.linalg.norm(poses[:, :3, 3], axis=1, keepdims=True), 1e-9)
+    facing = np.clip(np.einsum("ki,ki->k", poses[:, :3, 2], rays), 0.0, 1.0)
+    return (
+        p
+        * (1.0 + cfg.handle_weight * handle)
+        * (cfg.leverage_floor + (1 - cfg.leverage_floor) * leverage)
+        * (cfg.facing_floor + (1 - cfg.facing_floor) * facing)
+    )
+
+
+def critic_probability(view: ObjectView, poses_camera: np.ndarray, critic) -> np.ndarray:
+    """(K,) the grasp critic's success probability of camera-frame grasps, its features read from the decoder at
+    their object-frame poses; 0.5 for every grasp without a critic (the cues alone rank then)."""
+    if critic is None:
+        return np.full(len(poses_camera), 0.5)
+    poses = np.linalg.inv(view.camera_T_object) @ poses_camera
+    pos = poses[:, :3, 3].astype(np.float32)
+    _, raw = decoder_field(view.decoder, view.code, view.joint, device=view.device)(pos)
+    offset = np.linalg.norm(decode_outputs(raw).offset.numpy(), axis=1)
+    ext = GraspExtractionConfig()
+    tcp_sdf, change = joint_sdf_change(view.decoder, view.code, view.joint, pos, ext.moving_delta, view.device)
+    features = grasp_features(view.decoder, view.code, view.joint, poses, offset, tcp_sdf, change, view.device)
+    return critic.probability(features)
+
+
+def handle_cue(poses: np.ndarray, plane, object_tree: cKDTree) -> np.ndarray:
+    """(K,) in [0, 1]: how far the material between each grasp's pads stands proud of the object's front plane
+    (0 at 5 mm or less, 1 at 2 cm and up to the handle band's top; 0 without a plane)."""
+    if plane is None:
+        return np.zeros(len(poses))
+    normal, offset = plane
+    out = np.zeros(len(poses))
+    for k, pose in enumerate(poses):
+        near = object_tree.data[object_tree.query_ball_point(pose[:3, 3], 0.03)]
+        local = to_tcp_frame(pose, near)
+        between = near[(np.abs(local[:, 0]) < 0.01) & (np.abs(local[:, 1]) < 0.035) & (np.abs(local[:, 2]) < 0.02)]
+        if len(between):
+            h = float(np.median(between @ normal + offset))
+            out[k] = np.clip((h - 0.005) / 0.015, 0.0, 1.0) if h <= HANDLE_MAX_HEIGHT_M else 0.0
+    return out
+
+
+def leverage_cue(view: ObjectView, poses: np.ndarray) -> np.ndarray:
+    """(K,) in [0, 1]: distance of each grasp from the predicted hinge line over the largest distance of the
+    object's observed points from it (revolute); 1 for prismatic joints (any point of a drawer pulls alike)."""
+    if view.joint_type != "revolute":
+        return np.ones(len(poses))
+    d = np.asarray(view.axis_direction, float) / max(np.linalg.norm(view.axis_direction), 1e-9)
+
+    def distance(points):
+        rel = np.asarray(points, float) - view.axis_point
+        return np.linalg.norm(rel - np.outer(rel @ d, d), axis=1)
+
+    reach = float(distance(view.observed).max()) if len(view.observed) else 1.0
+    return np.clip(distance(poses[:, :3, 3]) / max(reach, 1e-6), 0.0, 1.0)
+
+
+#: Named anchoring settings, cumulative (each adds one lever to the one before): the ladder of the evaluation
+#: (``centerart eval scenes --grasps``) and of ``benchmarks/results/``. ``full`` is the predictor's default.
+LADDER = ("proposal", "checks", "snap", "square", "observed", "handle", "full")
+
+
+def anchoring_setting(name: str) -> AnchoringConfig:
+    """The anchoring of one ladder step (see :data:`LADDER`): ``proposal`` is off (the decoder's grasps through
+    the proposal's collision filter); ``checks`` verifies the decoder's grasps where they are; ``snap`` moves them
+    onto the material first; ``square`` adds their front-plane-squared twins; ``observed`` adds the SGDF's grasps
+    at the observed points; ``handle`` adds grasps across handles; ``full`` ranks with the cues (before it, by
+    the critic alone)."""
+    if name not in LADDER:
+        raise ValueError(f"grasp setting {name!r}: expected one of {', '.join(LADDER)}")
+    step = LADDER.index(name)
+    return AnchoringConfig(
+        enabled=step >= 1,
+        snap=step >= 2,
+        square=step >= 3,
+        observed_candidates=step >= 4,
+        handle_candidates=step >= 5,
+        handle_weight=1.0 if step >= 6 else 0.0,
+        leverage_floor=0.3 if step >= 6 else 1.0,
+        facing_floor=0.2 if step >= 6 else 1.0,
+    )
