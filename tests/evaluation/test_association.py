@@ -176,7 +176,7 @@ def _report(records: list[dict]) -> dict:
 
 def test_report_shows_both_associations_and_dashes_for_old_records():
     new = [_row(method="centerart", depth="true", sr=False, sr_image=True, sr_image_abort="", sr_gt_pose=False,
-                sr_image_gt_pose=True, instance=i) for i in range(2)]  # fmt: skip
+                sr_image_gt_pose=True, image_same_as_3d=i == 0, instance=i) for i in range(2)]  # fmt: skip
     new.append(_row(method="oracle", depth="true", sr=True, sr_image=True, sr_image_abort=""))
     old = [{k: v for k, v in r.items() if "image" not in k} for r in new]
     records = [{"set": "new", "rows": new, "images": []}, {"set": "old", "rows": old, "images": []}]
@@ -193,5 +193,7 @@ def test_report_shows_both_associations_and_dashes_for_old_records():
     # stage analysis: SR 3-D, its true-pose swap, SR img, its true-pose swap
     assert "| new / centerart / true | 2 | 0.00 | 0.00 | 1.00 | 1.00 |" in md
     assert "| old / centerart / true | 2 | 0.00 | 0.00 | - | - |" in md
+    # variants: matched (3-D), associated (img), img = 3-D (the outcome reused for one of the two objects)
+    assert "| new / centerart / true | 2 | 1.00 | 1.00 | 0.50 | 0.00 |" in md
     assert "collision_at_spawn, approach_blocked" in md and "within 0.1 m" in md and "visible instance mask" in md
     assert report["thresholds"]["matching"]["published_protocol_aborts"] == list(PUBLISHED_PROTOCOL_ABORTS)

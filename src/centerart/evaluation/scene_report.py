@@ -152,12 +152,16 @@ def published_table(report: dict) -> list[str]:
 
 
 def variants_table(report: dict) -> list[str]:
-    lines = ["| group (set, method, depth) | objects | matched (3-D) | SR 3-D | SR-axis | any of top 5 | "
-             "full-open reached | range at end (mean) |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    """SR variants of the 3-D match, with the share of objects each association found and how often the image
+    association picked the 3-D matched prediction (its outcome then reused)."""
+    lines = ["| group (set, method, depth) | objects | matched (3-D) | associated (img) | img = 3-D | SR 3-D | "
+             "SR-axis | any of top 5 | full-open reached | range at end (mean) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for key, g in report["groups"].items():
         fo = g.get("full_open") or {}
         lines.append(
-            f"| {group_label(report, key)} | {g['objects']} | {_f(g['matched_share'])} | {_f(g['sr'])} | "
+            f"| {group_label(report, key)} | {g['objects']} | {_f(g['matched_share'])} | "
+            f"{_f(g.get('image_matched_share'))} | {_f(g.get('image_same_as_3d_share'))} | {_f(g['sr'])} | "
             f"{_f(g['sr_axis'])} | {_f(g['top5_any'])} | {_f(fo.get('reached_share'))} | "
             f"{_f(fo.get('fraction_of_range_mean'))} |"
         )
