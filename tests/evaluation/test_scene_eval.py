@@ -127,6 +127,13 @@ def test_resumed_run_equals_uninterrupted_and_the_report_is_complete(single_data
     methods = {k.split("|")[1] for k in report["groups"]}
     assert methods == {"centerart", "baseline", "oracle"}
     assert report["groups"][next(k for k in report["groups"] if "|oracle|" in k)]["sr"] >= 0.5
+    # both associations in every row and every report (the image association's keys, EVALUATION.md)
+    rows = [r for f in (full / "records").glob("*/*.json") for r in json.loads(f.read_text())["rows"]]
+    assert all(isinstance(r["sr_image"], bool) and "image_matched" in r for r in rows)
+    assert all(r["sr_image"] == r["sr"] for r in rows if r["method"] != "centerart")
+    assert all(r["sr_image"] == r["sr"] for r in rows if r.get("image_same_as_3d"))
+    assert "SR img true" in md and "SR 3-D true" in md and "## Published protocol, for comparison only" in md
+    assert all(g["sr_image"] is not None for g in report["groups"].values())
 
     # "Killed" after one scene, then rerun: the second run evaluates only the missing scene.
     part = tmp_path / "part"

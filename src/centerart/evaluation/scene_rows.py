@@ -1,9 +1,18 @@
 """Per-object result rows of the scene evaluation, one method at a time, for one view and depth mode.
 
 A row is one ground-truth object (at least ``MIN_VISIBLE_FRACTION`` visible) under one method. Failures are rows
-too: a missed detection, an object without a grasp, every abort. Frames: predictions arrive in the OpenCV camera
-frame and are mapped to the scene's world frame with the view's ``world_T_camera`` for execution; rows store the
-executed top grasp in the camera frame (for pictures) and errors in cm / degrees / mm as their keys say.
+too: a missed detection, an object without a grasp, every abort.
+
+Two associations of the learned method's predictions with objects (EVALUATION.md, "Matching predictions to
+objects"), both executed: the 3-D centre match (``matched``, ``sr``, ``rsr``, ...: Hungarian within
+``MATCH_DISTANCE_M``; detection precision / recall use it) and the image association (``image_matched``,
+``sr_image``, ``rsr_image``, ``sr_image_abort``, ``sr_image_gt_pose``: the prediction whose heatmap peak lies in
+the object's visible mask, :data:`IMAGE_ASSOCIATION`). Where both pick the same prediction its outcome is reused
+(``image_same_as_3d``), so physics runs only for the objects where they differ.
+
+Frames: predictions arrive in the OpenCV camera frame and are mapped to the scene's world frame with the view's
+``world_T_camera`` for execution; rows store the executed top grasp (of the 3-D match) in the camera frame (for
+pictures) and errors in cm / degrees / mm as their keys say.
 """
 
 from __future__ import annotations
@@ -21,6 +30,12 @@ from centerart.geometry.matching import match_points
 from centerart.grasps.executor import commanded_direction
 from centerart.models.encoder.readout import Detection
 from centerart.training.encoder_metrics import MATCH_DISTANCE_M, MIN_VISIBLE_FRACTION, object_errors, view_metrics
+
+#: The image association's rule (printed in reports): no distance threshold, only the visible mask.
+IMAGE_ASSOCIATION = (
+    "the prediction whose heatmap peak (rounded to its pixel) lies in the object's visible instance mask; "
+    "highest score first, one prediction per object"
+)
 
 
 @dataclass
@@ -78,6 +93,28 @@ def failed(reason: str) -> dict:
     return {"sr": False, "sr_abort": reason, "sr_axis": False, "top5_any": False, "rsr": False, "nearest_label_m": None}
 
 
+def _abort_word(trial: dict) -> str:
+    """The row's outcome word of an executed trial: the executor's abort, "" for a success, else too little motion."""
+    return trial["abort"] or ("" if trial["success"] else "too_little_motion")
+
+
+def same_as_3d(row: dict) -> dict:
+    """Image-association keys of a row whose executed grasp is, by construction, the 3-D match's one (the baseline
+    and the oracle use the true mask; an image-associated prediction that is the 3-D matched one)."""
+    return {"image_matched": row["matched"], "sr_image": row["sr"], "sr_image_abort": row["sr_abort"],
+            "rsr_image": row["rsr"]}  # fmt: skip
+
+
+def top_grasp_trial(ctx: SceneContext, v: ViewInput, k: int, grasps_cam: np.ndarray) -> dict:
+    """SR (the hand follows the true joint), its outcome word and RSR of the top one of ranked camera-frame grasps
+    of object ``k``: one physics trial, without the variants of :func:`grasp_outcomes`."""
+    if len(grasps_cam) == 0:
+        return {"sr": False, "sr_abort": "no_grasp", "rsr": False}
+    world = v.world_T_camera @ np.asarray(grasps_cam[0], float)
+    trial = execute_grasp(ctx.phys, k, world)
+    return {"sr": trial["success"], "sr_abort": _abort_word(trial), "rsr": relaxed_success(world, ctx.labels_world[k])}
+
+
 def grasp_outcomes(ctx: SceneContext, v: ViewInput, k: int, grasps_cam: np.ndarray, axis: dict | None) -> dict:
     """SR, SR-axis (when ``axis``, world frame, is given), full-open, any-of-top-5 and RSR of ranked camera-frame
     grasps of object ``k``."""
@@ -88,7 +125,7 @@ def grasp_outcomes(ctx: SceneContext, v: ViewInput, k: int, grasps_cam: np.ndarr
     nearest = float(nearest_label_position_m(world[:1], ctx.labels_world[k])[0])
     out = {
         "sr": sr["success"],
-        "sr_abort": sr["abort"] or ("" if sr["success"] else "too_little_motion"),
+        "sr_abort": _abort_word(sr),
         "sr_displacement": sr["displacement"],
         "sr_axis": execute_grasp(ctx.phys, k, world[0], axis)["success"] if axis is not None else None,
         "full_open": full_open(ctx.phys, k, world[0], axis) if axis is not None else None,
@@ -114,6 +151,34 @@ def match_predictions(v: ViewInput, preds) -> dict[int, int]:
     true_t = np.array([np.asarray(o["camera_T_object"])[:3, 3] for o in v.labels["objects"]]).reshape(-1, 3)
     pred_t = np.array([p.camera_T_object[:3, 3] for p in preds]).reshape(-1, 3)
     return {j: i for i, j in match_points(pred_t, true_t, MATCH_DISTANCE_M)}
+
+
+def peak_pixel(peak_uv, shape: tuple[int, int]) -> tuple[int, int] | None:
+    """(row, column) of the pixel holding a heatmap peak, or None when it has none or lies outside the image.
+
+    ``peak_uv`` is (u, v) = (column, row) in the input image's pixels with pixel centres at integers
+    (``Letterbox.to_camera_pixels``), so rounding gives the pixel; ``shape`` is the image's (H, W)."""
+    if peak_uv is None:
+        return None
+    u, v = np.rint(np.asarray(peak_uv, float)[:2]).astype(int)
+    return (int(v), int(u)) if 0 <= v < shape[0] and 0 <= u < shape[1] else None
+
+
+def associate_by_image(v: ViewInput, preds) -> dict[int, int]:
+    """label index -> prediction index by image association (:data:`IMAGE_ASSOCIATION`).
+
+    Object ``j`` owns the pixels where ``v.instances == labels["objects"][j]["instance"]`` (its visible mask). A
+    peak lies in at most one mask, so a prediction serves at most one object; of several predictions whose peaks
+    lie in one object's mask, the highest ``score`` is taken (what a robot acting on its best detection does).
+    No distance threshold: how far the 3-D centre is off matters only through the executed grasp."""
+    owner = {int(o["instance"]): j for j, o in enumerate(v.labels["objects"])}
+    out: dict[int, int] = {}
+    for i in sorted(range(len(preds)), key=lambda i: -float(preds[i].score)):  # stable: ties keep list order
+        pixel = peak_pixel(getattr(preds[i], "peak_uv", None), v.instances.shape[:2])
+        j = owner.get(int(v.instances[pixel])) if pixel is not None else None
+        if j is not None and j not in out:
+            out[j] = i
+    return out
 
 
 def true_mesh_camera(ctx: SceneContext, v: ViewInput, k: int, obj: dict):
@@ -142,26 +207,49 @@ def gt_pose_swap(predictor, v: ViewInput, pred, obj: dict) -> np.ndarray:
     return predictor.predict_detection(det, v.rgb, v.depth, v.K).grasp_poses
 
 
+def image_outcomes(ctx: SceneContext, v: ViewInput, predictor, preds, obj: dict, row: dict, i3d, i_img,
+                   ablation: bool) -> dict:  # fmt: skip
+    """Image-association keys of one learned row (object ``obj``, its 3-D match ``i3d`` and image association
+    ``i_img``, prediction indices or None). Executing grasps is the expensive part: when both associations pick the
+    same prediction, the 3-D match's outcome already in ``row`` is reused; only a different prediction runs."""
+    k = obj["instance"] - 1
+    if i_img is None:  # no peak in the object's mask: a miss, a failure like the 3-D miss
+        out = {"image_matched": False, "image_same_as_3d": None, "sr_image": False, "sr_image_abort": "missed",
+               "rsr_image": False}  # fmt: skip
+        return out | ({"sr_image_gt_pose": None} if ablation else {})
+    if i_img == i3d:
+        out = {**same_as_3d(row), "image_same_as_3d": True}
+        return out | ({"sr_image_gt_pose": row.get("sr_gt_pose")} if ablation else {})
+    pred = preds[i_img]
+    trial = top_grasp_trial(ctx, v, k, pred.grasp_poses)
+    out = {"image_matched": True, "image_same_as_3d": False, "sr_image": trial["sr"],
+           "sr_image_abort": trial["sr_abort"], "rsr_image": trial["rsr"]}  # fmt: skip
+    if ablation:
+        out["sr_image_gt_pose"] = top_grasp_trial(ctx, v, k, gt_pose_swap(predictor, v, pred, obj))["sr"]
+    return out
+
+
 def learned_rows(ctx: SceneContext, v: ViewInput, predictor, method: str, shape: bool, ablation: bool):
-    """Rows of the learned method, plus the image's detection counts and latency."""
+    """Rows of the learned method (3-D match and image association, see the module docstring), plus the image's
+    detection counts (3-D match) and latency."""
     preds = predictor.predict(v.rgb, v.depth, v.K)
     image = {"scene": v.scene, "view": v.view, "depth": v.depth_mode, "method": method}
     image.update(counts=view_metrics(preds, v.labels)["counts"], timing_s=dict(predictor.timing))
-    match = match_predictions(v, preds)
+    match, by_image = match_predictions(v, preds), associate_by_image(v, preds)
     rows = []
     for j, obj in v.ground_truth():
         row, k = base_row(v, obj, method), obj["instance"] - 1
         if j not in match:
-            rows.append({**row, "matched": False, **failed("missed")})
-            continue
-        pred = preds[match[j]]
-        row.update(matched=True, errors=object_errors(pred, obj))
-        row.update(grasp_outcomes(ctx, v, k, pred.grasp_poses, predicted_axis_world(v, pred)))
-        if shape:
-            row["shape"] = shape_row(ctx, v, k, obj, pred)
-        if ablation:
-            swapped = gt_pose_swap(predictor, v, pred, obj)
-            row["sr_gt_pose"] = grasp_outcomes(ctx, v, k, swapped, None)["sr"]
+            row.update(matched=False, **failed("missed"))
+        else:
+            pred = preds[match[j]]
+            row.update(matched=True, errors=object_errors(pred, obj))
+            row.update(grasp_outcomes(ctx, v, k, pred.grasp_poses, predicted_axis_world(v, pred)))
+            if shape:
+                row["shape"] = shape_row(ctx, v, k, obj, pred)
+            if ablation:  # only the top grasp's SR is used: one trial, not the variants
+                row["sr_gt_pose"] = top_grasp_trial(ctx, v, k, gt_pose_swap(predictor, v, pred, obj))["sr"]
+        row.update(image_outcomes(ctx, v, predictor, preds, obj, row, match.get(j), by_image.get(j), ablation))
         rows.append(row)
     return rows, image
 
@@ -177,7 +265,8 @@ def baseline_rows(ctx: SceneContext, v: ViewInput, seed: int) -> list[dict]:
         if len(grasps) == 0:
             outcome["sr_abort"] = "no_handle_found"
         outcome["sr_axis"] = None  # the baseline predicts no joint
-        rows.append({**base_row(v, obj, "baseline"), "matched": True, **outcome})
+        row = {**base_row(v, obj, "baseline"), "matched": True, **outcome}
+        rows.append(row | same_as_3d(row))  # the true mask picks the object: both associations are the same
     return rows
 
 
@@ -192,7 +281,7 @@ def oracle_rows(ctx: SceneContext, v: ViewInput) -> list[dict]:
         ok = trial["grasp_world"] is not None
         out = {
             "sr": trial["success"],
-            "sr_abort": trial["abort"] or ("" if trial["success"] else "too_little_motion"),
+            "sr_abort": _abort_word(trial),
             "sr_axis": None,
             "top5_any": None,
             "rsr": ok,
@@ -202,5 +291,6 @@ def oracle_rows(ctx: SceneContext, v: ViewInput) -> list[dict]:
         if ok:
             cam = np.linalg.inv(v.world_T_camera) @ np.asarray(trial["grasp_world"], float)
             out["grasp_camera"] = cam.round(5).tolist()
-        rows.append({**base_row(v, obj, "oracle"), "matched": True, **out})
+        row = {**base_row(v, obj, "oracle"), "matched": True, **out}
+        rows.append(row | same_as_3d(row))  # a label of the object itself: both associations are the same
     return rows

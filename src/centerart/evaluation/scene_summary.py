@@ -2,7 +2,9 @@
 errors, detection, latency, and where the failures come from.
 
 Every rate counts every ground-truth object of its group in its denominator (misses and aborts are failures);
-a rate is None only where a method does not define it (SR-axis of the oracle and the baseline).
+a rate is None only where a method does not define it (SR-axis of the oracle and the baseline) or where the
+records predate it (the image-association rates of records written before rows held ``sr_image``). The one
+exception, labelled as such, is the published protocol's rate (:func:`published_protocol`), for comparison only.
 """
 
 from __future__ import annotations
@@ -13,10 +15,42 @@ import numpy as np
 
 from centerart.evaluation.metrics import distance_distribution
 
+#: Outcomes the published protocol leaves out of its denominator as "aborted runs" (reference/
+#: published-implementation.md 5.3: a hand that could not be placed or could not approach; the run never
+#: happened). Their counterparts in the executor: the hand collides where it spawns, or is blocked on the way in.
+#: ``no_contact``, ``lost_grip`` and too little motion happen after the hand closed at the grasp: the run took
+#: place and failed, so they stay failures; so does ``no_grasp`` (the prediction decoded no grasp: the method's
+#: failure, not the run's).
+PUBLISHED_PROTOCOL_ABORTS = ("collision_at_spawn", "approach_blocked")
+
 
 def rate(rows: list[dict], key: str) -> float | None:
     vals = [bool(r[key]) for r in rows if r.get(key) is not None]
     return float(np.mean(vals)) if vals else None
+
+
+def rate_if_recorded(rows: list[dict], key: str) -> float | None:
+    """``rate`` over every row, or None when some row lacks ``key`` (records written before the key existed):
+    a rate over only the newer rows would silently be over another set of objects."""
+    return rate(rows, key) if rows and all(key in r for r in rows) else None
+
+
+def published_protocol(rows: list[dict]) -> dict | None:
+    """The published protocol's SR, for comparison only: the hand follows the true hinge (our SR already does),
+    objects without an image-associated prediction (misses) and aborted runs (:data:`PUBLISHED_PROTOCOL_ABORTS`)
+    leave the denominator; the image-associated prediction's top grasp is executed. None for old records."""
+    if not rows or not all("image_matched" in r for r in rows):
+        return None
+    missed = sum(not r["image_matched"] for r in rows)
+    aborted = sum(bool(r["image_matched"] and r["sr_image_abort"] in PUBLISHED_PROTOCOL_ABORTS) for r in rows)
+    kept = [r for r in rows if r["image_matched"] and r["sr_image_abort"] not in PUBLISHED_PROTOCOL_ABORTS]
+    return {
+        "objects": len(rows),
+        "left_out_missed": missed,
+        "left_out_aborted": aborted,
+        "counted": len(kept),
+        "sr": float(np.mean([bool(r["sr_image"]) for r in kept])) if kept else None,
+    }
 
 
 def _median(values) -> float | None:
@@ -66,6 +100,16 @@ def error_summary(rows: list[dict]) -> dict | None:
     }
 
 
+def category_summary(rows: list[dict]) -> dict:
+    return {
+        "objects": len(rows),
+        "sr": rate(rows, "sr"),
+        "sr_image": rate_if_recorded(rows, "sr_image"),
+        "sr_axis": rate(rows, "sr_axis"),
+        "rsr": rate(rows, "rsr"),
+    }
+
+
 def group_summary(rows: list[dict]) -> dict:
     nearest = np.array([np.inf if r.get("nearest_label_m") is None else r["nearest_label_m"] for r in rows])
     by_cat = defaultdict(list)
@@ -76,16 +120,19 @@ def group_summary(rows: list[dict]) -> dict:
         "sr": rate(rows, "sr"),
         "sr_axis": rate(rows, "sr_axis"),
         "rsr": rate(rows, "rsr"),
+        "sr_image": rate_if_recorded(rows, "sr_image"),
+        "rsr_image": rate_if_recorded(rows, "rsr_image"),
         "top5_any": rate(rows, "top5_any"),
         "matched_share": rate(rows, "matched"),
+        "image_matched_share": rate_if_recorded(rows, "image_matched"),
+        # of the objects with an image-associated prediction: how often it is the 3-D matched one (outcome reused)
+        "image_same_as_3d_share": rate(rows, "image_same_as_3d"),
+        "published_protocol": published_protocol(rows),
         "full_open": full_open_summary(rows),
         "aborts": dict(sorted(Counter(r["sr_abort"] or "success" for r in rows).items())),
         "nearest_label": distance_distribution(nearest),
         "errors": error_summary(rows),
-        "by_category": {
-            c: {"objects": len(rs), "sr": rate(rs, "sr"), "sr_axis": rate(rs, "sr_axis"), "rsr": rate(rs, "rsr")}
-            for c, rs in sorted(by_cat.items())
-        },
+        "by_category": {c: category_summary(rs) for c, rs in sorted(by_cat.items())},
     }
 
 
@@ -110,7 +157,9 @@ STAGES = ("detection", "pose_and_joint", "shape_and_grasp_decoding", "execution"
 def stage_losses(rows: list[dict], oracle_rows: list[dict]) -> dict | None:
     """Where the learned method's failures come from, by swapping in ground truth one stage at a time:
     detection (missed), pose and joint (the true pose and state make the grasp succeed), shape and grasp
-    decoding (still failing with them, while a ground-truth label succeeds), execution (the label fails too)."""
+    decoding (still failing with them, while a ground-truth label succeeds), execution (the label fails too).
+    The failures are those of the 3-D match; the image association's SR and its true-pose swap stand beside it
+    (None for records without them)."""
     if not rows or not any("sr_gt_pose" in r for r in rows):
         return None
     oracle = {(r["scene"], r["view"], r["instance"]): r["sr"] for r in oracle_rows}
@@ -131,9 +180,18 @@ def stage_losses(rows: list[dict], oracle_rows: list[dict]) -> dict | None:
         "objects": n,
         "sr": rate(rows, "sr"),
         "sr_with_true_pose_and_joint": float(np.mean([bool(r["sr"] or r.get("sr_gt_pose")) for r in rows])),
+        "sr_image": rate_if_recorded(rows, "sr_image"),
+        "sr_image_with_true_pose_and_joint": _swap_rate(rows, "sr_image", "sr_image_gt_pose"),
         "failures_by_stage": {k: out[k] for k in STAGES},
         "failure_share_by_stage": {k: out[k] / n for k in out},
     }
+
+
+def _swap_rate(rows: list[dict], sr_key: str, swap_key: str) -> float | None:
+    """Share of rows that succeed as they are or with the true pose swapped in (a miss has no swap: None)."""
+    if not all(sr_key in r and swap_key in r for r in rows):
+        return None
+    return float(np.mean([bool(r[sr_key] or r[swap_key]) for r in rows]))
 
 
 def summarize_records(records: list[dict]) -> dict:
