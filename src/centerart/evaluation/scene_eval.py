@@ -208,11 +208,13 @@ def evaluate_scene(scene_dir: Path, labels_dir: Path, cfg: dict) -> dict:
     rows, images = [], []
     try:
         for v in view_inputs(scene_dir, cfg["depth"]):
+            first = predictor_for(cfg, cfg["refine"][0], cfg.get("grasps", ("full",))[0])
+            encoded = first.encode(v.rgb, v.depth, v.K)  # one encoder pass per image, shared by every setting
             for refine in cfg["refine"]:
                 for grasps in cfg.get("grasps", ("full",)):
                     ablation = cfg["ablation"] and refine == cfg["refine"][0]
                     predictor, method = predictor_for(cfg, refine, grasps), method_name(refine, grasps)
-                    r, image = learned_rows(ctx, v, predictor, method, cfg["shape"], ablation)
+                    r, image = learned_rows(ctx, v, predictor, method, cfg["shape"], ablation, encoded)
                     rows += r
                     images.append(image)
             if cfg["baseline"]:

@@ -229,10 +229,11 @@ def image_outcomes(ctx: SceneContext, v: ViewInput, predictor, preds, obj: dict,
     return out
 
 
-def learned_rows(ctx: SceneContext, v: ViewInput, predictor, method: str, shape: bool, ablation: bool):
+def learned_rows(ctx: SceneContext, v: ViewInput, predictor, method: str, shape: bool, ablation: bool, encoded=None):
     """Rows of the learned method (3-D match and image association, see the module docstring), plus the image's
-    detection counts (3-D match) and latency."""
-    preds = predictor.predict(v.rgb, v.depth, v.K)
+    detection counts (3-D match) and latency. ``encoded``: the image's encoder pass (``Predictor.encode``), shared
+    by the grasp settings of one evaluation."""
+    preds = predictor.predict(v.rgb, v.depth, v.K, encoded=encoded)
     image = {"scene": v.scene, "view": v.view, "depth": v.depth_mode, "method": method}
     image.update(counts=view_metrics(preds, v.labels)["counts"], timing_s=dict(predictor.timing))
     match, by_image = match_predictions(v, preds), associate_by_image(v, preds)

@@ -170,18 +170,28 @@ class Predictor:
     def from_pretrained(cls, device: str = "cpu", config: PredictorConfig | None = None) -> Predictor:
         return cls(None, None, device, config)
 
-    def predict(self, rgb: np.ndarray, depth: np.ndarray, K) -> list[ObjectPrediction]:
-        """Objects in one RGB (H, W, 3) uint8 image with depth (H, W) in metres (holes 0 / NaN) and 3x3 ``K``."""
+    def predict(self, rgb: np.ndarray, depth: np.ndarray, K, encoded=None) -> list[ObjectPrediction]:
+        """Objects in one RGB (H, W, 3) uint8 image with depth (H, W) in metres (holes 0 / NaN) and 3x3 ``K``.
+        ``encoded``: this image's :meth:`encode` result, to reuse one encoder pass across predictor settings."""
+        camera, depth = self._checked(rgb, depth, K)
+        encoded = self.encode(rgb, depth, K) if encoded is None else encoded
+        t0 = time.perf_counter()
+        self.timing = {"encoder_s": encoded.seconds, "grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
+        self.last_heatmap = encoded.heatmap
+        preds = self._predict_objects(encoded.detections, depth, camera, self._scene_tree(depth, camera))
+        self.timing["total_s"] = time.perf_counter() - t0 + encoded.seconds
+        return preds
+
+    def encode(self, rgb: np.ndarray, depth: np.ndarray, K):
+        """The encoder's pass over one image (detections with masks, heatmap; ``seconds`` it took), which
+        :meth:`predict` decodes; same inputs as :meth:`predict`."""
         from centerart.models.encoder.detect import detect_objects
 
         camera, depth = self._checked(rgb, depth, K)
         t0 = time.perf_counter()
         encoded = detect_objects(self.encoder.encoder, rgb, depth, camera, self.config.peak_threshold)
-        self.timing = {"encoder_s": time.perf_counter() - t0, "grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
-        self.last_heatmap = encoded.heatmap
-        preds = self._predict_objects(encoded.detections, depth, camera, self._scene_tree(depth, camera))
-        self.timing["total_s"] = time.perf_counter() - t0
-        return preds
+        encoded.seconds = time.perf_counter() - t0
+        return encoded
 
     def predict_detection(self, det: Detection, rgb: np.ndarray, depth: np.ndarray, K) -> ObjectPrediction:
         """Decode, refine, filter and rank grasps for one given detection (e.g. one with ground-truth pose and

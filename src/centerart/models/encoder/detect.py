@@ -23,6 +23,8 @@ class EncodedImage:
     detections: list[Detection]
     heatmap: np.ndarray
     """(H, W) predicted centre heatmap in the camera image's pixels."""
+    seconds: float = 0.0
+    """Wall time of the encoder pass (set by ``Predictor.encode``)."""
     letterbox: Letterbox
 
 
