@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from centerart.geometry.planes import ransac_plane
+
 #: RANSAC inlier distance (m) of the front-face plane.
 PLANE_DISTANCE_M = 0.01
 PLANE_ITERATIONS = 500
@@ -43,31 +45,9 @@ def thresholds() -> dict:
 def front_plane(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, float] | None:
     """(unit normal toward the camera, offset d) with ``n . p + d = 0`` on the dominant plane, or None.
 
-    RANSAC written here rather than open3d's ``segment_plane``: that one runs its iterations in parallel and
-    returns slightly different planes from run to run even when seeded, and the evaluation's records must be
-    reproducible. All hypotheses are scored at once on a subsample, the winner is refit to its inliers."""
-    if len(points) < 50:
-        return None
-    rng = np.random.default_rng(seed)
-    sample = points if len(points) <= PLANE_SAMPLE else points[rng.choice(len(points), PLANE_SAMPLE, replace=False)]
-    tri = sample[rng.integers(0, len(sample), (PLANE_ITERATIONS, 3))]
-    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    length = np.linalg.norm(normals, axis=1)
-    keep = length > 1e-9
-    if not keep.any():
-        return None
-    normals = normals[keep] / length[keep, None]
-    offsets = -np.einsum("ij,ij->i", normals, tri[keep, 0])
-    counts = (np.abs(sample @ normals.T + offsets) < PLANE_DISTANCE_M).sum(axis=0)
-    best = int(np.argmax(counts))
-    inliers = points[np.abs(points @ normals[best] + offsets[best]) < PLANE_DISTANCE_M]
-    if len(inliers) < 30:
-        return None
-    centroid = inliers.mean(axis=0)
-    n = np.linalg.svd(inliers - centroid, full_matrices=False)[2][2]
-    if n @ centroid > 0:  # the camera is at the origin: face the normal toward it
-        n = -n
-    return n, float(-n @ centroid)
+    The deterministic RANSAC of :func:`centerart.geometry.planes.ransac_plane` with the baseline's thresholds."""
+    plane = ransac_plane(points, PLANE_DISTANCE_M, PLANE_ITERATIONS, PLANE_SAMPLE, seed)
+    return None if plane is None else (plane[0], plane[1])
 
 
 def handle_clusters(points: np.ndarray, normal: np.ndarray, offset: float) -> list[np.ndarray]:
