@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from PIL import Image as PILImage
 
 from centerart.cli import main
 from centerart.models.checkpoint import default_checkpoint
@@ -268,6 +269,11 @@ def npy(array):
     return written("depth.npy", lambda p: np.save(p, array))
 
 
+def png8(array):
+    """An 8-bit depth PNG (a visualisation, not metric depth)."""
+    return written("depth8.png", lambda p: PILImage.fromarray(array).save(p))
+
+
 def eval_scenes(scenes, *extra, out_setup=None):
     def build(fx, tmp):
         folder = scenes(fx, tmp) if callable(scenes) else scenes
@@ -475,6 +481,7 @@ CASES = [
     Case("predict-rgb-random", predict(rgb=copied("rgb.png", d.random_bytes)), "rgb.png"),
     Case("predict-rgb-truncated", predict(rgb=copied("rgb.png", d.truncate)), "rgb.png"),
     Case("predict-depth-png-random", predict(depth=copied("depth.png", d.random_bytes)), "depth.png"),
+    Case("predict-depth-png-8bit", predict(depth=png8(np.full((480, 640), 150, np.uint8))), "depth8.png"),
     Case("predict-depth-npy-random", predict(depth=written("depth.npy", d.random_bytes)), "depth.npy"),
     Case("predict-depth-npy-strings", predict(depth=npy(np.full((480, 640), "a"))), "depth.npy"),
     Case("predict-depth-npy-complex", predict(depth=npy(np.ones((480, 640), complex))), "depth.npy"),

@@ -89,3 +89,22 @@ def test_predict_cli_names_bad_inputs(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "bad.pt: not a readable encoder checkpoint" in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()
+
+
+def test_8bit_depth_is_refused_through_the_cli(tmp_path, capsys):
+    """An 8-bit depth PNG (a visualisation, 256 levels) is one clear error naming the file; nothing is written."""
+    from centerart.cli import main
+
+    rgb = tmp_path / "rgb.png"
+    Image.fromarray(np.zeros((48, 64, 3), np.uint8)).save(rgb)
+    Image.fromarray(np.full((48, 64), 150, np.uint8)).save(tmp_path / "depth8.png")
+    (tmp_path / "k.json").write_text(json.dumps({"K": CAM.K.tolist(), "width": 64, "height": 48}))
+    with pytest.raises(CenterArtError, match=r"--depth .*depth8\.png: 8-bit depth image cannot hold metric depth"):
+        read_depth(tmp_path / "depth8.png")
+    args = ["predict", "--rgb", str(rgb), "--depth", str(tmp_path / "depth8.png"), "--intrinsics",
+            str(tmp_path / "k.json"), "--out", str(tmp_path / "out")]  # fmt: skip
+    assert main(args) == 2
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("centerart: error: --depth "), lines
+    assert "depth8.png" in lines[0] and "16-bit PNG in millimetres" in lines[0] and ".npy in metres" in lines[0]
+    assert not (tmp_path / "out").exists()

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from centerart.geometry.planes import dominant_plane
+from centerart.geometry.planes import ransac_plane
 from centerart.inference.handles import (
     CLUSTER_EPS_M,
     CLUSTER_MIN_POINTS,
@@ -44,9 +44,11 @@ def thresholds() -> dict:
 
 
 def front_plane(points: np.ndarray, seed: int = 0) -> tuple[np.ndarray, float] | None:
-    """(unit normal toward the camera, offset d) with ``n . p + d = 0`` on the object's dominant plane, or None
-    (:func:`centerart.geometry.planes.dominant_plane` at the baseline's RANSAC settings)."""
-    return dominant_plane(points, seed, PLANE_DISTANCE_M, PLANE_ITERATIONS, PLANE_SAMPLE)
+    """(unit normal toward the camera, offset d) with ``n . p + d = 0`` on the dominant plane, or None.
+
+    The deterministic RANSAC of :func:`centerart.geometry.planes.ransac_plane` with the baseline's thresholds."""
+    plane = ransac_plane(points, PLANE_DISTANCE_M, PLANE_ITERATIONS, PLANE_SAMPLE, seed)
+    return None if plane is None else (plane[0], plane[1])
 
 
 def baseline_grasps(points: np.ndarray, seed: int = 0) -> np.ndarray:

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from centerart.geometry.planes import dominant_plane
+from centerart.geometry.planes import ransac_plane
 from centerart.inference.decoder_grasps import (
     GraspExtractionConfig,
     grasp_features,
@@ -52,6 +52,8 @@ from centerart.inference.reconstruction import decoder_field
 from centerart.models.decoder import decode_outputs
 
 SOURCES = ("decoder", "observed", "handle")
+#: RANSAC inlier distance (m) of an object's front plane (the baseline's).
+FRONT_PLANE_DISTANCE_M = 0.01
 
 
 @dataclass(frozen=True)
@@ -148,6 +150,13 @@ def observed_field_candidates(view: ObjectView, cfg: AnchoringConfig) -> np.ndar
     return view.camera_T_object @ poses
 
 
+def front_plane(points: np.ndarray, seed: int) -> tuple[np.ndarray, float] | None:
+    """(normal toward the camera, offset) of the object's dominant plane in its observed points (camera frame), at
+    the baseline's RANSAC settings (1 cm inliers), or None."""
+    plane = ransac_plane(points, FRONT_PLANE_DISTANCE_M, seed=seed)
+    return None if plane is None else (plane[0], plane[1])
+
+
 def squared_to_plane(poses: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """TCP poses (K, 4, 4) turned to approach along ``-normal`` (the front plane's normal, toward the camera),
     keeping the closing axis' direction in the plane and the TCP where it was."""
@@ -184,7 +193,7 @@ def anchor_grasps(
     image (camera frame); ``critic``: the decoder's grasp critic or None."""
     observed = np.asarray(view.observed, float).reshape(-1, 3)
     view.observed = observed
-    plane = dominant_plane(observed, cfg.seed) if len(observed) >= 50 else None
+    plane = front_plane(observed, cfg.seed)
     poses, sources = candidate_set(view, decoded_camera, plane, cfg) if len(observed) else (np.zeros((0, 4, 4)), [])
     counts = {f"candidates_{s}": int(np.sum(np.asarray(sources) == s)) for s in SOURCES}
     if len(poses) == 0:

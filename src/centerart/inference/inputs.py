@@ -33,7 +33,8 @@ def read_rgb(path: Path) -> np.ndarray:
 
 def read_depth(path: Path, depth_scale: float | None = None) -> np.ndarray:
     """Depth in metres (float32, holes 0 or NaN). ``depth_scale``: metres per unit of an integer image
-    (default 0.001 for 16-bit PNGs, i.e. millimetres)."""
+    (default 0.001 for 16-bit PNGs, i.e. millimetres). 8-bit images (any format) are refused: they cannot hold
+    metric depth."""
     from PIL import Image, UnidentifiedImageError
 
     path = Path(path)
@@ -48,6 +49,13 @@ def read_depth(path: Path, depth_scale: float | None = None) -> np.ndarray:
         raise CenterArtError(f"--depth {path}: not a readable depth image ({safe_reason(err)})") from None
     if not np.issubdtype(raw.dtype, np.integer) and not np.issubdtype(raw.dtype, np.floating):
         raise CenterArtError(f"--depth {path}: holds {raw.dtype} values, expected integer or real numbers")
+    if raw.dtype.itemsize == 1 and np.issubdtype(raw.dtype, np.integer):
+        # 256 levels cannot hold metric depth (at millimetres they end at 0.255 m): an 8-bit depth image is almost
+        # always a visualisation (normalised or colour-mapped), and reading it would give silently wrong metres.
+        raise CenterArtError(
+            f"--depth {path}: 8-bit depth image cannot hold metric depth; "
+            "expected a 16-bit PNG in millimetres or a .npy in metres"
+        )
     if raw.ndim == 3 and raw.shape[-1] == 1:
         raw = raw[..., 0]
     if raw.ndim != 2:
