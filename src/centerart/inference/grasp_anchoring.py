@@ -50,6 +50,7 @@ from centerart.inference.observed_checks import (
 )
 from centerart.inference.reconstruction import decoder_field
 from centerart.models.decoder import decode_outputs
+from centerart.models.grasp_critic import ANCHOR_FEATURES, GRASP_FEATURES
 
 SOURCES = ("decoder", "observed", "handle")
 #: RANSAC inlier distance (m) of an object's front plane (the baseline's).
@@ -84,6 +85,9 @@ class AnchoringConfig:
     """Rank factor floor + (1 - floor) * r, r = distance from the predicted hinge / the object's largest (revolute)."""
     facing_floor: float = 0.2
     """Rank factor floor + (1 - floor) * cos, cos = how far the approach points away from the camera (>= 0)."""
+    use_ranker: bool = True
+    """Rank by the checkpoint's anchored-grasp ranker (``<checkpoint>.anchor_critic.json``) where it has one;
+    the factors above rank otherwise."""
     seed: int = 0
 
 
@@ -96,6 +100,8 @@ class AnchoredGrasps:
     sources: list[str]
     closing_points: np.ndarray
     """(K,) observed points of the object between each kept grasp's pads."""
+    features: np.ndarray
+    """(K, len(ANCHOR_FEATURES)) what the ranking read of each kept grasp (``grasp_critic.ANCHOR_FEATURES``)."""
     rejected_poses: np.ndarray
     rejected_reasons: list[str]
     counts: dict = field(default_factory=dict)
@@ -186,11 +192,11 @@ def candidate_set(view: ObjectView, decoded_camera: np.ndarray, plane, cfg: Anch
 
 
 def anchor_grasps(
-    view: ObjectView, decoded_camera: np.ndarray, scene_tree: cKDTree, critic, cfg: AnchoringConfig, top_k: int
+    view: ObjectView, decoded_camera: np.ndarray, scene_tree: cKDTree, critics, cfg: AnchoringConfig, top_k: int
 ) -> AnchoredGrasps:
     """The object's grasps made on, snapped to, checked against and ranked on its observed points (module doc).
     ``decoded_camera``: the decoder's grasps (K, 4, 4, camera frame); ``scene_tree``: every observed point of the
-    image (camera frame); ``critic``: the decoder's grasp critic or None."""
+    image (camera frame); ``critics``: (grasp critic, anchored-grasp ranker), either None."""
     observed = np.asarray(view.observed, float).reshape(-1, 3)
     view.observed = observed
     plane = front_plane(observed, cfg.seed)
@@ -200,10 +206,13 @@ def anchor_grasps(
         return _result(poses, np.zeros(0), sources, np.zeros(0, int), [], counts, top_k)
     object_tree = cKDTree(observed)
     reasons = np.full(len(poses), "", dtype=object)
+    shift = np.zeros(len(poses))
     if cfg.snap:
         snapped = [snap_to_material(p, object_tree, cfg.checks) for p in poses]
         reasons[[s is None for s in snapped]] = "far_from_material"
-        poses = np.array([p if s is None else s for p, s in zip(poses, snapped, strict=True)])
+        moved = np.array([p if s is None else s for p, s in zip(poses, snapped, strict=True)])
+        shift = np.linalg.norm(moved[:, :3, 3] - poses[:, :3, 3], axis=1)
+        poses = moved
     ok = reasons == ""
     counts["snapped"] = int(ok.sum())
     between = np.zeros(len(poses), int)
@@ -216,13 +225,15 @@ def anchor_grasps(
     reasons[ok & (hits > cfg.checks.max_collision_points)] = "collides_with_observed"
     ok = reasons == ""
     counts["clear"] = int(ok.sum())
-    scores = np.zeros(len(poses))
+    scores, features = np.zeros(len(poses)), np.zeros((len(poses), len(ANCHOR_FEATURES)))
     if ok.any():
-        scores[ok] = rank_scores(view, poses[ok], plane, object_tree, critic, cfg)
-    return _result(poses, scores, sources, between, list(reasons), counts, top_k)
+        extra = {"closing": between[ok], "shift": shift[ok], "sources": np.asarray(sources)[ok]}
+        features[ok] = anchor_features(view, poses[ok], plane, object_tree, extra)
+        scores[ok] = rank_scores(features[ok], critics, cfg)
+    return _result(poses, scores, sources, between, list(reasons), counts, top_k, features)
 
 
-def _result(poses, scores, sources, between, reasons, counts, top_k: int = 0) -> AnchoredGrasps:
+def _result(poses, scores, sources, between, reasons, counts, top_k: int = 0, features=None) -> AnchoredGrasps:
     """Kept grasps (reason "") best first, deduplicated by the decoder extraction's NMS to ``top_k``; the rejected
     ones aside with their reasons."""
     reasons = np.asarray(reasons, dtype=object).reshape(-1)
@@ -238,41 +249,60 @@ def _result(poses, scores, sources, between, reasons, counts, top_k: int = 0) ->
         scores=np.asarray(scores, float)[kept],
         sources=[str(sources[i]) for i in kept],
         closing_points=np.asarray(between)[kept],
+        features=np.zeros((0, len(ANCHOR_FEATURES))) if features is None else features[kept],
         rejected_poses=poses[rejected],
         rejected_reasons=[str(reasons[i]) for i in rejected],
         counts=counts,
     )
 
 
-def rank_scores(view: ObjectView, poses: np.ndarray, plane, object_tree: cKDTree, critic, cfg: AnchoringConfig):
-    """(K,) ranking scores of checked grasps (camera frame): critic probability x handle, leverage and facing cues
-    (module doc, step 4); each cue's factor is documented on :class:`AnchoringConfig`."""
-    p = critic_probability(view, poses, critic)
-    handle = handle_cue(poses, plane, object_tree)
-    leverage = leverage_cue(view, poses)
+def anchor_features(view: ObjectView, poses: np.ndarray, plane, object_tree: cKDTree, extra: dict) -> np.ndarray:
+    """(K, len(ANCHOR_FEATURES)) of checked camera-frame grasps: the critic's features read from the decoder at
+    their object-frame poses, then the observation's cues (``grasp_critic.ANCHOR_FEATURES``). ``extra``: the
+    grasps' ``closing`` point counts, ``shift`` by the snap (m) and ``sources``."""
     rays = poses[:, :3, 3] / np.maximum(np.linalg.norm(poses[:, :3, 3], axis=1, keepdims=True), 1e-9)
-    facing = np.clip(np.einsum("ki,ki->k", poses[:, :3, 2], rays), 0.0, 1.0)
+    columns = [
+        decoder_features(view, poses),
+        handle_cue(poses, plane, object_tree)[:, None],
+        leverage_cue(view, poses)[:, None],
+        np.clip(np.einsum("ki,ki->k", poses[:, :3, 2], rays), 0.0, 1.0)[:, None],
+        np.log1p(np.asarray(extra["closing"], float))[:, None],
+        np.asarray(extra["shift"], float)[:, None],
+        np.stack([np.asarray(extra["sources"]) == s for s in SOURCES], 1).astype(float),
+    ]
+    return np.concatenate(columns, 1)
+
+
+def rank_scores(features: np.ndarray, critics, cfg: AnchoringConfig) -> np.ndarray:
+    """(K,) ranking scores from :func:`anchor_features`: the anchored-grasp ranker's success probability where the
+    checkpoint has one (fitted to physics outcomes of anchored grasps, ``benchmarks/anchor_critic.py``); else the
+    grasp critic's probability (0.5 without one) times the cues' factors documented on :class:`AnchoringConfig`."""
+    critic, ranker = critics if critics is not None else (None, None)
+    if ranker is not None and cfg.use_ranker:
+        return ranker.probability(features)
+    col = {name: features[:, i] for i, name in enumerate(ANCHOR_FEATURES)}
+    p = critic.probability(features[:, : len(GRASP_FEATURES)]) if critic is not None else np.full(len(features), 0.5)
     return (
         p
-        * (1.0 + cfg.handle_weight * handle)
-        * (cfg.leverage_floor + (1 - cfg.leverage_floor) * leverage)
-        * (cfg.facing_floor + (1 - cfg.facing_floor) * facing)
+        * (1.0 + cfg.handle_weight * col["handle_cue"])
+        * (cfg.leverage_floor + (1 - cfg.leverage_floor) * col["leverage"])
+        * (cfg.facing_floor + (1 - cfg.facing_floor) * col["facing"])
     )
 
 
-def critic_probability(view: ObjectView, poses_camera: np.ndarray, critic) -> np.ndarray:
-    """(K,) the grasp critic's success probability of camera-frame grasps, its features read from the decoder at
-    their object-frame poses; 0.5 for every grasp without a critic (the cues alone rank then)."""
-    if critic is None:
-        return np.full(len(poses_camera), 0.5)
+def decoder_features(view: ObjectView, poses_camera: np.ndarray) -> np.ndarray:
+    """(K, len(GRASP_FEATURES)) the grasp critic's features of camera-frame grasps, read from the decoder at their
+    object-frame poses (|predicted offset| at the TCP: small where the field agrees a grasp is here); zeros
+    without a decoder (``view.decoder`` None: the observation's cues alone)."""
+    if view.decoder is None:
+        return np.zeros((len(poses_camera), len(GRASP_FEATURES)))
     poses = np.linalg.inv(view.camera_T_object) @ poses_camera
     pos = poses[:, :3, 3].astype(np.float32)
     _, raw = decoder_field(view.decoder, view.code, view.joint, device=view.device)(pos)
     offset = np.linalg.norm(decode_outputs(raw).offset.numpy(), axis=1)
     ext = GraspExtractionConfig()
     tcp_sdf, change = joint_sdf_change(view.decoder, view.code, view.joint, pos, ext.moving_delta, view.device)
-    features = grasp_features(view.decoder, view.code, view.joint, poses, offset, tcp_sdf, change, view.device)
-    return critic.probability(features)
+    return grasp_features(view.decoder, view.code, view.joint, poses, offset, tcp_sdf, change, view.device)
 
 
 def handle_cue(poses: np.ndarray, plane, object_tree: cKDTree) -> np.ndarray:

@@ -95,6 +95,8 @@ class ObjectPrediction:
     when anchoring is off (every grasp is the decoder's)."""
     grasp_closing_points: np.ndarray | None = None
     """(K,) observed points of the object between each grasp's pads (anchoring on), else None."""
+    grasp_features: np.ndarray | None = field(default=None, repr=False)
+    """(K, F) what the anchoring's ranking read of each grasp (``models.grasp_critic.ANCHOR_FEATURES``), else None."""
     rejected_grasps: np.ndarray | None = field(default=None, repr=False)
     """(R, 4, 4) candidates the anchoring rejected (camera frame), with ``rejected_reasons`` (R,)."""
     rejected_reasons: list[str] = field(default_factory=list)
@@ -132,6 +134,7 @@ def _anchoring_fields(anchored: AnchoredGrasps | None) -> dict:
     return {
         "grasp_sources": anchored.sources,
         "grasp_closing_points": anchored.closing_points,
+        "grasp_features": anchored.features,
         "rejected_grasps": anchored.rejected_poses,
         "rejected_reasons": anchored.rejected_reasons,
     }
@@ -287,8 +290,8 @@ class Predictor:
         if cfg.anchoring.enabled and observed is not None:
             view = ObjectView(self.fast_decoder, code, joint, pose, observed, det.joint_type, axis_point,
                               axis_direction, self.device)  # fmt: skip
-            critic = self.decoder.critic if cfg.grasp_critic else None
-            anchored = anchor_grasps(view, grasps_cam, scene, critic, cfg.anchoring, cfg.top_k_grasps)
+            critics = (self.decoder.critic, self.decoder.anchor_critic) if cfg.grasp_critic else None
+            anchored = anchor_grasps(view, grasps_cam, scene, critics, cfg.anchoring, cfg.top_k_grasps)
             grasps_cam, scores, info["anchoring"] = anchored.poses, anchored.scores, anchored.counts
         else:
             grasps_cam, scores = self._proposal_grasps(grasps_cam, grasps.scores, scene)

@@ -47,6 +47,9 @@ class LoadedDecoder:
     meta: dict = field(default_factory=dict, repr=False)
     critic: GraspCritic | None = field(default=None, repr=False)
     """The grasp critic stored beside the checkpoint (:mod:`~centerart.models.grasp_critic`), if any."""
+    anchor_critic: GraspCritic | None = field(default=None, repr=False)
+    """The ranker of grasps anchored in the observed depth stored beside it (``<checkpoint>.anchor_critic.json``,
+    features ``grasp_critic.ANCHOR_FEATURES``), if any."""
 
     @property
     def code_weight(self) -> float:
@@ -147,6 +150,7 @@ def load_decoder(path: Path | None = None, device: str | torch.device = "cpu") -
         path=path,
         meta=meta,
         critic=load_critic(path),
+        anchor_critic=load_critic(path, "anchor_critic"),
     )
 
 

@@ -45,8 +45,28 @@ surface was sampled: the number of agreeing candidates, which does (the predicto
 fraction of the 128-cell one's), is left out, so a critic fitted at 128 cells serves the predictor too."""
 
 
-_N = len(GRASP_FEATURES)
-_SCHEMA = {"mean": array(_N), "scale": array(_N), "weights": array(_N), "bias": float, "info?": dict}
+#: The anchored-grasp ranker's features (``inference.grasp_anchoring``): the critic's, then what the observation
+#: says of a grasp checked against the depth: material proud of the front plane between the pads (0-1), leverage
+#: about the predicted hinge (0-1), how far the approach points away from the camera (0-1), log(1 + observed points
+#: between the pads), how far the snap moved it (m), and where it came from (one-hot: decoder, observed, handle).
+ANCHOR_FEATURES = (
+    *GRASP_FEATURES,
+    "handle_cue",
+    "leverage",
+    "facing",
+    "closing_points_log",
+    "snap_shift_m",
+    "from_decoder",
+    "from_observed",
+    "from_handle",
+)
+#: What a critic file beside a checkpoint is for: ``critic`` ranks the decoder's grasps (GRASP_FEATURES);
+#: ``anchor_critic`` ranks grasps anchored in the observed depth (ANCHOR_FEATURES).
+KINDS = {"critic": GRASP_FEATURES, "anchor_critic": ANCHOR_FEATURES}
+
+
+def _schema(n: int) -> dict:
+    return {"mean": array(n), "scale": array(n), "weights": array(n), "bias": float, "info?": dict}
 
 
 @dataclass(frozen=True)
@@ -59,6 +79,8 @@ class GraspCritic:
     bias: float
     info: dict = field(default_factory=dict)
     """How it was fitted: data, counts, penalty, the decoder checkpoint's SHA-256 (``decoder_sha256``)."""
+    features: tuple[str, ...] = GRASP_FEATURES
+    """The feature names, in order (:data:`KINDS`)."""
 
     def probability(self, features: np.ndarray) -> np.ndarray:
         """(K,) success probabilities of grasps with features (K, F)."""
@@ -71,7 +93,7 @@ class GraspCritic:
         return {
             "format": FORMAT,
             "version": VERSION,
-            "features": list(GRASP_FEATURES),
+            "features": list(self.features),
             "mean": self.mean.tolist(),
             "scale": self.scale.tolist(),
             "weights": self.weights.tolist(),
@@ -80,32 +102,35 @@ class GraspCritic:
         }
 
     @classmethod
-    def from_dict(cls, d: dict, source: str = "grasp critic") -> GraspCritic:
-        """The critic of :meth:`to_dict`; a wrong format, feature list, field (``utils.json_schema``: finite numbers
-        of the right shapes) or a scale that is not positive is one :class:`CenterArtError` naming ``source``."""
+    def from_dict(cls, d: dict, source: str = "grasp critic", features=GRASP_FEATURES) -> GraspCritic:
+        """The critic of :meth:`to_dict`; a wrong format, feature list (``features`` expected), field
+        (``utils.json_schema``: finite numbers of the right shapes) or a scale that is not positive is one
+        :class:`CenterArtError` naming ``source``."""
         if not isinstance(d, dict) or d.get("format") != FORMAT or d.get("version") != VERSION:
             raise CenterArtError(f"{source}: not a centerart grasp critic (expected format {FORMAT!r} v{VERSION})")
-        if d.get("features") != list(GRASP_FEATURES):
-            raise CenterArtError(f"{source}: features {d.get('features')} differ from {list(GRASP_FEATURES)}")
-        problem = json_problem(d, _SCHEMA)
+        if d.get("features") != list(features):
+            raise CenterArtError(f"{source}: features {d.get('features')} differ from {list(features)}")
+        problem = json_problem(d, _schema(len(features)))
         if problem:
             raise CenterArtError(f"{source}: damaged grasp critic ({problem})")
         mean, scale, weights = (np.asarray(d[k], float) for k in ("mean", "scale", "weights"))
         if (scale <= 0).any():
             raise CenterArtError(f"{source}: grasp critic scales must be positive")
-        return cls(mean, scale, weights, float(d["bias"]), dict(d.get("info") or {}))
+        return cls(mean, scale, weights, float(d["bias"]), dict(d.get("info") or {}), tuple(features))
 
 
-def fit_critic(features: np.ndarray, outcomes: np.ndarray, l2: float = 1.0, info: dict | None = None) -> GraspCritic:
-    """Logistic regression of physics ``outcomes`` (K,) bool on ``features`` (K, F), each standardized, with the
-    penalty ``l2 / 2 * |weights|^2`` (bias free), by L-BFGS. Scipy does the optimization; the model itself is
-    these few lines rather than a new dependency (scikit-learn) for one linear classifier."""
+def fit_critic(
+    features: np.ndarray, outcomes: np.ndarray, l2: float = 1.0, info: dict | None = None, names=GRASP_FEATURES
+) -> GraspCritic:
+    """Logistic regression of physics ``outcomes`` (K,) bool on ``features`` (K, F) named ``names``, each
+    standardized, with the penalty ``l2 / 2 * |weights|^2`` (bias free), by L-BFGS. Scipy does the optimization;
+    the model itself is these few lines rather than a new dependency (scikit-learn) for one linear classifier."""
     from scipy.optimize import minimize
     from scipy.special import expit, log_expit
 
     x, y = np.asarray(features, float), np.asarray(outcomes, bool).astype(float)
-    if len(x) != len(y) or x.ndim != 2 or x.shape[1] != len(GRASP_FEATURES) or len(set(y.tolist())) < 2:
-        raise ValueError(f"fit_critic: need (K, {len(GRASP_FEATURES)}) features and both outcomes, got {x.shape}")
+    if len(x) != len(y) or x.ndim != 2 or x.shape[1] != len(names) or len(set(y.tolist())) < 2:
+        raise ValueError(f"fit_critic: need (K, {len(names)}) features and both outcomes, got {x.shape}")
     mean, scale = x.mean(0), np.maximum(x.std(0), 1e-9)
     z = (x - mean) / scale
 
@@ -118,42 +143,44 @@ def fit_critic(features: np.ndarray, outcomes: np.ndarray, l2: float = 1.0, info
         return nll + 0.5 * l2 * (w @ w), grad
 
     theta = minimize(loss, np.zeros(z.shape[1] + 1), jac=True, method="L-BFGS-B").x
-    return GraspCritic(mean, scale, theta[:-1], float(theta[-1]), dict(info or {}))
+    return GraspCritic(mean, scale, theta[:-1], float(theta[-1]), dict(info or {}), tuple(names))
 
 
-def critic_path(checkpoint: Path) -> Path:
-    """Where the critic of a decoder checkpoint lives: ``<checkpoint>.critic.json`` beside it."""
+def critic_path(checkpoint: Path, kind: str = "critic") -> Path:
+    """Where a critic of a decoder checkpoint lives: ``<checkpoint>.<kind>.json`` beside it (:data:`KINDS`)."""
     checkpoint = Path(checkpoint)
-    return checkpoint.with_name(checkpoint.name + ".critic.json")
+    return checkpoint.with_name(f"{checkpoint.name}.{kind}.json")
 
 
-def critic_record(checkpoint: Path) -> dict | None:
+def critic_record(checkpoint: Path, kind: str = "critic") -> dict | None:
     """``{"path", "sha256"}`` of the critic beside ``checkpoint`` for reports and manifests (None: there is none)."""
-    path = critic_path(checkpoint)
+    path = critic_path(checkpoint, kind)
     return {"path": str(path), "sha256": file_sha256(path)} if path.is_file() else None
 
 
-def save_critic(critic: GraspCritic, checkpoint: Path) -> Path:
-    """Write ``critic`` beside ``checkpoint`` (atomic), recording the checkpoint's SHA-256."""
+def save_critic(critic: GraspCritic, checkpoint: Path, kind: str = "critic") -> Path:
+    """Write ``critic`` beside ``checkpoint`` as ``kind`` (atomic), recording the checkpoint's SHA-256."""
     from centerart.utils.atomic import atomic_write_json
 
+    if critic.features != KINDS[kind]:
+        raise ValueError(f"save_critic: a {kind} has features {KINDS[kind]}, this one {critic.features}")
     d = critic.to_dict()
     d["info"] = {**d["info"], "decoder_sha256": file_sha256(checkpoint)}
-    atomic_write_json(critic_path(checkpoint), d)
-    return critic_path(checkpoint)
+    atomic_write_json(critic_path(checkpoint, kind), d)
+    return critic_path(checkpoint, kind)
 
 
-def load_critic(checkpoint: Path) -> GraspCritic | None:
-    """The critic stored beside ``checkpoint``; None where there is none. A damaged one, or one fitted to another
-    checkpoint (its recorded SHA-256 differs), is a :class:`CenterArtError` naming the file."""
-    path = critic_path(checkpoint)
+def load_critic(checkpoint: Path, kind: str = "critic") -> GraspCritic | None:
+    """The critic of ``kind`` stored beside ``checkpoint``; None where there is none. A damaged one, or one fitted
+    to another checkpoint (its recorded SHA-256 differs), is a :class:`CenterArtError` naming the file."""
+    path = critic_path(checkpoint, kind)
     if not path.is_file():
         return None
     try:
         d = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
         raise CenterArtError(f"{path}: unreadable grasp critic ({type(err).__name__})") from None
-    critic = GraspCritic.from_dict(d, str(path))
+    critic = GraspCritic.from_dict(d, str(path), KINDS[kind])
     if critic.info.get("decoder_sha256") != file_sha256(checkpoint):
         raise CenterArtError(
             f"{path}: fitted to another decoder than {checkpoint} (SHA-256 differs); refit or delete it"
