@@ -26,6 +26,7 @@ from centerart.inference.decoder_grasps import GraspExtractionConfig, predict_sh
 from centerart.inference.grasp_anchoring import AnchoredGrasps, AnchoringConfig, ObjectView, anchor_grasps
 from centerart.inference.grasp_filter import CollisionFilterConfig, collision_free
 from centerart.inference.inputs import check_inputs
+from centerart.inference.pose_from_depth import PoseFromDepthConfig, correct_pose
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
 from centerart.inference.refinement import RefineConfig, SdfRefineConfig, refine_pose_icp, refine_sdf
 from centerart.inference.shape_prior import best_fit_code, nearest_code
@@ -49,6 +50,13 @@ class PredictorConfig:
     """Pose, shape code and joint code fitted to the observed depth through the decoder (before grasps)."""
     collision: CollisionFilterConfig = field(default_factory=CollisionFilterConfig)
     """The proposal's own collision filter (used when anchoring is off)."""
+    pose_from_depth: bool = False
+    """Correct each object's pose against its observed points before its grasps are placed (the decoded visible
+    surface aligned by ICP, upright and yaw-only when gravity is known: :mod:`~.pose_from_depth`)."""
+    pose_correction: PoseFromDepthConfig = field(default_factory=PoseFromDepthConfig)
+    estimate_gravity: bool = False
+    """Without a given gravity, estimate it from the image's largest low horizontal plane
+    (:func:`centerart.geometry.gravity.estimate_gravity`; reliable on true depth, often off on stereo depth)."""
     anchoring: AnchoringConfig = field(default_factory=AnchoringConfig)
     """Grasps made on, snapped to, checked against and ranked on the object's observed points
     (:mod:`~centerart.inference.grasp_anchoring`); off: the decoder's grasps as they are (the proposal alone)."""
@@ -153,6 +161,7 @@ class Predictor:
         self.decoder = load_decoder(decoder_ckpt, device=self.device)
         self.config = config or PredictorConfig()
         self.timing: dict[str, float] = {}
+        self.gravity: np.ndarray | None = None
         self.fast_decoder = self._inference_decoder(self.config.runtime)
 
     def _inference_decoder(self, runtime: str):
@@ -173,14 +182,17 @@ class Predictor:
     def from_pretrained(cls, device: str = "cpu", config: PredictorConfig | None = None) -> Predictor:
         return cls(None, None, device, config)
 
-    def predict(self, rgb: np.ndarray, depth: np.ndarray, K, encoded=None) -> list[ObjectPrediction]:
+    def predict(self, rgb: np.ndarray, depth: np.ndarray, K, encoded=None, gravity=None) -> list[ObjectPrediction]:
         """Objects in one RGB (H, W, 3) uint8 image with depth (H, W) in metres (holes 0 / NaN) and 3x3 ``K``.
-        ``encoded``: this image's :meth:`encode` result, to reuse one encoder pass across predictor settings."""
+        ``encoded``: this image's :meth:`encode` result, to reuse one encoder pass across predictor settings.
+        ``gravity``: the downward direction in the camera frame (3,), e.g. from TF or the camera's IMU; used by
+        the pose correction (``config.pose_from_depth``)."""
         camera, depth = self._checked(rgb, depth, K)
         encoded = self.encode(rgb, depth, K) if encoded is None else encoded
         t0 = time.perf_counter()
         self.timing = {"encoder_s": encoded.seconds, "grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
         self.last_heatmap = encoded.heatmap
+        self.gravity = self._gravity(gravity, depth, camera)
         preds = self._predict_objects(encoded.detections, depth, camera, self._scene_tree(depth, camera))
         self.timing["total_s"] = time.perf_counter() - t0 + encoded.seconds
         return preds
@@ -201,6 +213,7 @@ class Predictor:
         joint state swapped in, to measure what each stage loses); same inputs and frames as :meth:`predict`."""
         camera, depth = self._checked(rgb, depth, K)
         self.timing = {"grasps_s": 0.0, "refine_s": 0.0, "filter_s": 0.0}
+        # self.gravity stays the last predict()'s: predict_detection re-runs one object of that image
         return self._predict_objects([det], depth, camera, self._scene_tree(depth, camera))[0]
 
     @staticmethod
@@ -214,6 +227,21 @@ class Predictor:
         """One search tree of the observed points for every object's grasp collision check (None: no check on)."""
         checks = self.config.collision.enabled or self.config.anchoring.enabled
         return cKDTree(backproject_depth(depth, camera.K)) if checks else None
+
+    def _gravity(self, gravity, depth: np.ndarray, camera: Intrinsics) -> np.ndarray | None:
+        """The unit downward direction (camera frame) the pose correction uses: the given one, else the estimate
+        (``config.estimate_gravity``), else None (a free 6-DoF correction)."""
+        if gravity is not None:
+            g = np.asarray(gravity, float).reshape(-1)
+            if g.shape != (3,) or not np.all(np.isfinite(g)) or np.linalg.norm(g) < 1e-9:
+                raise CenterArtError(f"gravity: expected a non-zero direction (3 numbers), got {gravity!r}")
+            return g / np.linalg.norm(g)
+        if self.config.pose_from_depth and self.config.estimate_gravity:
+            from centerart.geometry.gravity import estimate_gravity
+
+            return estimate_gravity(backproject_depth(depth[::2, ::2], camera.scaled(
+                depth[::2, ::2].shape[1], depth[::2, ::2].shape[0]).K))  # fmt: skip
+        return None
 
     def _tick(self, key: str, since: float) -> float:
         now = time.perf_counter()
@@ -280,6 +308,9 @@ class Predictor:
         t = time.perf_counter()
         if cfg.refine.icp and observed is not None:
             pose, info["icp"] = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
+        if cfg.pose_from_depth and observed is not None and len(recon.mesh.faces):
+            surface = recon.mesh.sample(4000, seed=0) if hasattr(recon.mesh, "sample") else recon.mesh.vertices
+            pose, info["pose_from_depth"] = correct_pose(surface, pose, observed, self.gravity, cfg.pose_correction)
         t = self._tick("refine_s", t)
         # The axis moves with the refined pose (it was predicted relative to the object).
         delta = pose @ np.linalg.inv(det.camera_T_object)
