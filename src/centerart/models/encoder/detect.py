@@ -23,9 +23,9 @@ class EncodedImage:
     detections: list[Detection]
     heatmap: np.ndarray
     """(H, W) predicted centre heatmap in the camera image's pixels."""
+    letterbox: Letterbox
     seconds: float = 0.0
     """Wall time of the encoder pass (set by ``Predictor.encode``)."""
-    letterbox: Letterbox
 
 
 def back_to_camera(image: np.ndarray, box: Letterbox, width: int, height: int, nearest: bool = False) -> np.ndarray:
