@@ -83,7 +83,7 @@ def scenes_show(cfg) -> None:
 def predict(cfg) -> None:
     import numpy as np
 
-    from centerart.predict import run_predict
+    from centerart.predict import anchoring_summary, run_predict
 
     record = run_predict(cfg)
     for obj in record["objects"]:
@@ -92,6 +92,8 @@ def predict(cfg) -> None:
             f"object {obj['index']}: score {obj['score']:.2f}, {j['type']} joint at {j['state']:.2f} {j['unit']}, "
             f"centre ({t[0]:+.2f}, {t[1]:+.2f}, {t[2]:.2f}) m, {len(obj['grasps'])} grasps"
         )
+        if (line := anchoring_summary(obj)) is not None:
+            print(f"  {line}")
     timing = ", ".join(f"{k} {v:.2f}" for k, v in record["timing_s"].items())
     print(f"{len(record['objects'])} objects ({timing})")
     print(f"wrote {cfg.out}/ (predictions.json, overlay.png, scene.glb, meshes); 3-D view: centerart view {cfg.out}")

@@ -107,21 +107,46 @@ def compare_with_labels(record: dict, labels: dict) -> list[dict]:
                 joint_state_error=abs(p["joint"]["state"] - joint["state"]) * scale,
                 joint_state_unit=unit,
                 grasps=len(p["grasps"]),
+                **top_grasp_check(p, min_closing_points(record)),
             )
         rows.append(row)
     return rows
 
 
+def min_closing_points(record: dict) -> int:
+    """The anchoring check's threshold (observed points between the pads) the record was predicted with."""
+    from centerart.inference.observed_checks import ObservedCheckConfig
+
+    checks = ((record.get("config") or {}).get("anchoring") or {}).get("checks") or {}
+    return int(checks.get("min_closing_points", ObservedCheckConfig().min_closing_points))
+
+
+def top_grasp_check(obj: dict, min_points: int) -> dict:
+    """Of one predicted object (a predictions.json object): where its top grasp came from (``decoder``,
+    ``observed``, ``handle``; None without anchoring) and whether it touches observed material: "yes" when at least
+    ``min_points`` observed points of the object lie between its pads, "no" when fewer, "n/a" when anchoring was
+    off (no closing points saved) or there is no grasp."""
+    top = (obj.get("grasps") or [None])[0]
+    if top is None or "closing_points" not in top:
+        return {"top_grasp_source": None if top is None else top.get("source"), "top_grasp_on_material": "n/a"}
+    on = "yes" if int(top["closing_points"]) >= min_points else "no"
+    return {"top_grasp_source": top.get("source"), "top_grasp_on_material": on}
+
+
 def print_comparison(rows: list[dict]) -> None:
+    """The comparison table: per labelled object its detection, pose and joint errors, and whether the top grasp
+    touches observed material (anchoring's closing points >= its threshold; n/a when anchoring was off) and its
+    source."""
     within = f"<{MATCH_DISTANCE_M * 100:.0f}cm"
     head = f"{'object':24s} {'visible':>7s} {'found':>5s} {'t err cm':>8s} {within:>6s} {'R err deg':>9s}"
-    print(f"{head} {'type':>5s} q err")
+    print(f"{head} {'type':>5s} {'q err':>10s} {'grasp on material':>17s} {'from':>8s}")
     for r in rows:
         line = f"{r['object_id']:24s} {r['visible_fraction']:7.2f} {'yes' if r['found'] else 'no':>5s}"
         if r["found"]:
             kind = "ok" if r["joint_type_correct"] else "wrong"
             line += f" {r['translation_cm']:8.1f} {'yes' if r['centre_within'] else 'no':>6s} {r['rotation_deg']:9.1f}"
-            line += f" {kind:>5s} {r['joint_state_error']:.1f} {r['joint_state_unit']}"
+            line += f" {kind:>5s} {r['joint_state_error']:7.1f} {r['joint_state_unit']:>2s}"
+            line += f" {r.get('top_grasp_on_material', 'n/a'):>17s} {r.get('top_grasp_source') or '-':>8s}"
         print(line)
 
 

@@ -4,7 +4,8 @@ Writes to ``--out`` (complete or not at all: a temporary folder renamed at the e
 
     predictions.json    every object's pose, joint, shape code and ranked grasps (schema: inference/prediction_io.py)
     object_XX.ply       each object's decoded mesh, camera frame (--no-meshes skips them)
-    overlay.png         detections, poses, joint axes and top grasps on the RGB image
+    overlay.png         detections, poses, joint axes and top grasps on the RGB image (--show-rejected: and the
+                        grasp candidates that anchoring rejected, coloured by reason)
     heatmap.png         the predicted centre heatmap over the image
     scene.glb           observed point cloud, meshes, grippers and joint axes (any glTF viewer)
     rgb.png, depth.npy, points.ply   the inputs, for the 3-D viewer (``centerart view OUT``)
@@ -51,6 +52,9 @@ class PredictConfig:
     meshes: bool = True
     """Decode and write each object's mesh (costs about a second per object on a CPU)."""
     predictor: PredictorConfig = field(default_factory=PredictorConfig)
+    show_rejected: bool = False
+    """Also draw the grasp candidates that anchoring rejected on overlay.png, coloured by reason (a legend says
+    which); predictions.json keeps them either way (``rejected_grasps``)."""
     view: bool = False
     """Open the interactive 3-D viewer on the result when done."""
 
@@ -97,7 +101,8 @@ def write_outputs(tmp: Path, predictor, preds, rgb, depth, camera, cfg: PredictC
     trimesh.PointCloud(points, colors=colors).export(tmp / "points.ply")
     Image.fromarray(rgb[..., :3]).save(tmp / "rgb.png")
     np.save(tmp / "depth.npy", depth.astype(np.float32))
-    Image.fromarray(draw_prediction(rgb, preds, camera.K)).save(tmp / "overlay.png")
+    overlay = draw_prediction(rgb, preds, camera.K, show_rejected=cfg.show_rejected)
+    Image.fromarray(overlay).save(tmp / "overlay.png")
     Image.fromarray(heatmap_image(rgb[..., :3], predictor.last_heatmap)).save(tmp / "heatmap.png")
     step = max(1, len(points) // 60000)
     write_glb(build_scene(points[::step], colors[::step], preds, meshes), tmp / "scene.glb")
@@ -115,6 +120,23 @@ def write_outputs(tmp: Path, predictor, preds, rgb, depth, camera, cfg: PredictC
     record = predictions_record(preds, camera, checkpoints, config, timing, files)
     atomic_write_json(tmp / "predictions.json", record)
     return record
+
+
+def anchoring_summary(obj: dict) -> str | None:
+    """One line of what grasp anchoring did for one object of a predictions record (its ``refinement.anchoring``
+    counts and its top grasp's source and closing points), or None when anchoring did not run for it."""
+    counts = (obj.get("refinement") or {}).get("anchoring")
+    if not counts:
+        return None
+    sources = ", ".join(f"{s} {counts.get(f'candidates_{s}', 0)}" for s in ("decoder", "observed", "handle"))
+    total = sum(counts.get(f"candidates_{s}", 0) for s in ("decoder", "observed", "handle"))
+    checks = ", ".join(f"{k.replace('_', ' ')} {counts[k]}" for k in ("snapped", "material_between_pads", "clear")
+                       if k in counts)  # fmt: skip
+    line = f"anchoring: {counts.get('kept', 0)} kept of {total} candidates ({sources}; survived: {checks})"
+    grasps = obj.get("grasps") or []
+    if grasps and "source" in grasps[0]:
+        line += f"; top grasp from {grasps[0]['source']}, {grasps[0].get('closing_points', '?')} points between pads"
+    return line
 
 
 def run_predict(cfg: PredictConfig) -> dict:

@@ -5,7 +5,8 @@ The fixture is a hand-made prediction folder (the ``centerart predict`` layout, 
 inference/prediction_io.py): two objects in front of a coloured floor, camera 640 x 480 (OpenCV frame, metres).
 Object 0 is a revolute 0.3 m box left of the image centre, its mesh saved as ``object_00.ply``, with three grasps;
 object 1 is prismatic, right of centre, with no mesh file (the viewer decodes it from a shipped shape code) and one
-grasp.
+grasp. Object 0 also carries grasp anchoring's fields (its grasps' sources and closing points, the anchoring counts,
+and three rejected candidates of two reasons); object 1 does not, as if written with anchoring off.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ from centerart.cli import main
 from centerart.geometry.camera import project
 from centerart.geometry.transforms import make_pose
 from centerart.inference.prediction_io import FORMAT, FRAMES, VERSION
-from centerart.viz.viewer import ROOT, ViewConfig, serve_viewer
+from centerart.viz.prediction_overlay import REASON_COLORS
+from centerart.viz.viewer import GRIPPER_SEGMENTS_TCP, ROOT, SOURCE_COLORS, ViewConfig, anchoring_markdown, serve_viewer
 
 WIDTH, HEIGHT = 640, 480
 K = np.array([[500.0, 0.0, 319.5], [0.0, 500.0, 239.5], [0.0, 0.0, 1.0]])
@@ -66,6 +68,20 @@ def object_record(k: int, joint_type: str, code: list[float], grasps: list[np.nd
     }
 
 
+SOURCES = ("observed", "handle", "decoder")
+REJECTED = ("collides_with_observed", "far_from_material", "collides_with_observed")
+
+
+def add_anchoring(rec: dict, centre: np.ndarray) -> None:
+    """Grasp anchoring's fields on one object record: sources, closing points, counts and rejected candidates."""
+    for g, source, n in zip(rec["grasps"], SOURCES, (30, 12, 9), strict=True):
+        g.update(source=source, closing_points=n)
+    rec["refinement"] = {"anchoring": {"candidates_decoder": 20, "candidates_observed": 50, "candidates_handle": 1,
+                                       "snapped": 60, "material_between_pads": 25, "clear": 6, "kept": 3}}  # fmt: skip
+    rec["rejected_grasps"] = [{"camera_T_tcp": tcp_facing_camera(centre, dx).tolist(), "reason": reason}
+                              for dx, reason in zip((0.04, -0.04, 0.12), REJECTED, strict=True)]  # fmt: skip
+
+
 def floor_points(n: int = 4000, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """A floor 0.4 m below the camera, 1 to 3 m ahead, coloured by a blue-grey gradient."""
     rng = np.random.default_rng(seed)
@@ -89,6 +105,7 @@ def write_prediction_dir(folder: Path, code: np.ndarray) -> Path:
         object_record(1, "prismatic", np.asarray(code, float).tolist(), [tcp_facing_camera(CAMERA_T_OBJECT[1][:3, 3])],
                       None),
     ]  # fmt: skip
+    add_anchoring(objects[0], centre0)
     record = {
         "format": FORMAT,
         "version": VERSION,
@@ -165,6 +182,40 @@ def test_gui_actions(viewer):
     assert not np.array_equal(after.vertices.shape, before.vertices.shape) or not np.allclose(
         after.vertices, before.vertices
     )
+
+
+def test_rejected_layer_and_grasp_colours(viewer):
+    """The rejected candidates are hidden at start, one node per reason (object 1 has none); the layer checkbox
+    shows them; the grasp colour choice colours object 0's grasps by source (object 1's, without one, by score)."""
+    obj0, obj1 = viewer.objects
+    assert set(obj0.rejected) == set(REJECTED) and obj1.rejected == {}
+    assert not viewer.gui["rejected"].value and not any(h.visible for h in obj0.rejected.values())
+    collides = obj0.rejected["collides_with_observed"]
+    assert collides.points.shape == (2 * len(GRIPPER_SEGMENTS_TCP), 2, 3)
+    assert np.all(collides.colors == REASON_COLORS["collides_with_observed"])
+    viewer.set_layer("rejected", True)
+    assert all(h.visible for h in obj0.rejected.values())
+    score_colour = obj1.grasps[0].colors.copy()
+    viewer.set_grasp_colors("source")
+    for handle, source in zip(obj0.grasps, SOURCES, strict=True):
+        assert np.all(handle.colors == SOURCE_COLORS[source])
+    assert np.array_equal(obj1.grasps[0].colors, score_colour)
+    viewer.set_grasp_colors("score")
+    assert not np.all(obj0.grasps[0].colors == SOURCE_COLORS["observed"])
+    text = anchoring_markdown(obj0.record)
+    assert "candidates decoder 20, observed 50, handle 1" in text and "kept 3" in text
+    assert "collides with observed 2, far from material 1" in text and anchoring_markdown(obj1.record) is None
+
+
+def test_rejected_shown_at_start_with_the_option(prediction_dir):
+    server = serve_viewer(ViewConfig(path=prediction_dir, port=0, show_rejected=True, grasp_colors="source"),
+                          block=False)  # fmt: skip
+    try:
+        obj0 = server.viewer.objects[0]
+        assert server.viewer.gui["rejected"].value and all(h.visible for h in obj0.rejected.values())
+        assert np.all(obj0.grasps[1].colors == SOURCE_COLORS["handle"])
+    finally:
+        server.stop()
 
 
 def test_object_without_mesh_or_code(prediction_dir, capsys):

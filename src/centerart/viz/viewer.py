@@ -3,10 +3,13 @@
 Shows what ``centerart predict`` wrote to DIR (``predictions.json``, schema in
 :mod:`centerart.inference.prediction_io`): the observed coloured point cloud (``points.ply``; else back-projected
 from ``depth.npy`` and ``rgb.png``), each object's mesh (``object_XX.ply``; decoded from its shape code when the
-file is missing), its frame, its joint axis, and its ranked grasps as gripper markers coloured by score.
+file is missing), its frame, its joint axis, and its ranked grasps as gripper markers coloured by score (or by
+source: decoder / observed / handle, where grasp anchoring saved them). The ``rejected`` layer (off at start) shows
+the candidates anchoring rejected, as thin outlines coloured by reason (the overlay's :data:`REASON_COLORS`).
 
-GUI: a checkbox per layer and per object, a top-k grasps slider, and a slider per object that moves its joint
-state (normalized, 0 closed .. 1 open) and re-decodes the mesh with the decoder the prediction was made with.
+GUI: a checkbox per layer and per object, a top-k grasps slider, a grasp-colour choice, and a slider per object that
+moves its joint state (normalized, 0 closed .. 1 open) and re-decodes the mesh with the decoder the prediction was
+made with.
 
 Frames: every pose in the file is ``camera_T_X`` in the OpenCV camera frame (x right, y down, z forward). The whole
 scene hangs under one node, ``/camera``, posed as ``world_T_camera = WORLD_R_CAMERA`` (-90 degrees about x), so
@@ -34,9 +37,13 @@ from centerart.utils.checks import at_least, between, positive
 #: Columns: the OpenCV camera axes (x right, y down, z forward) in viser's z-up world (x right, y forward, z up).
 WORLD_R_CAMERA = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 ROOT = "/camera"
-LAYERS = ("points", "meshes", "grasps", "axes", "frames")
+LAYERS = ("points", "meshes", "grasps", "rejected", "axes", "frames")
+#: RGB of kept grasps by source (grasp anchoring), when the grasp colour is "source".
+SOURCE_COLORS = {"decoder": (80, 120, 255), "observed": (40, 200, 90), "handle": (255, 150, 0)}
 AXIS_LENGTH = 0.6  # m, joint-axis line through the predicted axis point
 AXIS_COLOR = (255, 200, 0)
+LAYER_HINTS = {"rejected": "grasp candidates that anchoring rejected: pale blue-grey far from material, "
+               "cyan no material between the pads, magenta collides with observed points"}  # fmt: skip
 #: Gripper outline in the TCP frame (segments, m): wrist stem, palm bar, two fingers to their tips.
 GRIPPER_SEGMENTS_TCP = np.array(
     [
@@ -72,6 +79,10 @@ class ViewConfig:
     """Point size in metres (the GUI slider changes it)."""
     mesh_opacity: float = 0.8
     """Object mesh opacity, 0..1 (the GUI slider changes it); below 1 the frames and grasps inside show."""
+    show_rejected: bool = False
+    """Show the grasp candidates that anchoring rejected, coloured by reason, at start (a GUI checkbox toggles it)."""
+    grasp_colors: Literal["score", "source"] = "score"
+    """Kept grasps coloured by score, or by source (decoder / observed / handle); the GUI changes it."""
 
     def __post_init__(self):
         at_least("--top-k", self.top_k, 0)
@@ -89,6 +100,8 @@ class ObjectView:
     color: tuple[int, int, int]
     nodes: dict = field(default_factory=dict)
     grasps: list = field(default_factory=list)
+    rejected: dict = field(default_factory=dict)
+    """Rejection reason -> one line-segments node with all of the object's candidates rejected for it."""
     joint: float = 0.0
     requested: float = 0.0
     lock: threading.Lock = field(default_factory=threading.Lock)
@@ -108,6 +121,35 @@ def score_colors(scores: np.ndarray) -> np.ndarray:
     from matplotlib import colormaps
 
     return (colormaps["plasma"](0.85 * np.clip(np.asarray(scores, float), 0.0, 1.0))[:, :3] * 255).astype(np.uint8)
+
+
+def grasp_colors(grasps: list[dict], mode: str) -> np.ndarray:
+    """RGB uint8 (N, 3) of saved grasps: by score (:func:`score_colors`), or by their ``source``
+    (:data:`SOURCE_COLORS`; a grasp without a known source keeps its score colour)."""
+    if not grasps:
+        return np.zeros((0, 3), np.uint8)
+    colors = score_colors([g.get("score", 0.0) for g in grasps])
+    if mode == "source":
+        for r, g in enumerate(grasps):
+            if g.get("source") in SOURCE_COLORS:
+                colors[r] = SOURCE_COLORS[g["source"]]
+    return colors
+
+
+def anchoring_markdown(rec: dict) -> str | None:
+    """A line for an object's GUI folder: grasp anchoring's counts (candidates per source, survivors of each
+    check, kept) and the rejected candidates per reason; None when the record has no anchoring counts."""
+    counts = (rec.get("refinement") or {}).get("anchoring")
+    if not counts:
+        return None
+    sources = ", ".join(f"{s} {counts.get(f'candidates_{s}', 0)}" for s in SOURCE_COLORS)
+    checks = ", ".join(f"{k.replace('_', ' ')} {counts[k]}" for k in ("snapped", "material_between_pads", "clear")
+                       if k in counts)  # fmt: skip
+    reasons: dict[str, int] = {}
+    for r in rec.get("rejected_grasps") or []:
+        reasons[r["reason"]] = reasons.get(r["reason"], 0) + 1
+    rejected = ", ".join(f"{k.replace('_', ' ')} {n}" for k, n in sorted(reasons.items())) or "none"
+    return f"anchoring: candidates {sources}; survived {checks}; kept {counts.get('kept', 0)}. Rejected: {rejected}"
 
 
 def _wxyz(rot: np.ndarray) -> np.ndarray:
@@ -187,6 +229,8 @@ class Viewer:
         self._decoder_lock = threading.Lock()
         self.gui: dict = {}
         self.layers = dict.fromkeys(LAYERS, True)
+        self.layers["rejected"] = bool(cfg.show_rejected)
+        self.grasp_colors = cfg.grasp_colors
         self.top_k = cfg.top_k
         self.mesh_opacity = float(np.clip(cfg.mesh_opacity, 0.0, 1.0))
         self.objects = [ObjectView(rec, _palette(k)) for k, rec in enumerate(self.data.get("objects", []))]
@@ -278,8 +322,7 @@ class Viewer:
             seg = np.stack([p - d * AXIS_LENGTH / 2, p + d * AXIS_LENGTH / 2])[None]
             obj.nodes["axis"] = scene.add_line_segments(f"{name}/axis", seg, AXIS_COLOR, thickness=0.008)
         grasps = rec.get("grasps") or []
-        colors = score_colors([g.get("score", 0.0) for g in grasps]) if grasps else []
-        for r, (g, color) in enumerate(zip(grasps, colors, strict=True)):
+        for r, (g, color) in enumerate(zip(grasps, grasp_colors(grasps, self.grasp_colors), strict=True)):
             pose = np.asarray(g["camera_T_tcp"], float)
             visible = r < self.cfg.top_k
             gname = f"{name}/grasps/{r:03d}"
@@ -290,6 +333,21 @@ class Viewer:
                 segs = GRIPPER_SEGMENTS_TCP @ pose[:3, :3].T + pose[:3, 3]
                 handle = scene.add_line_segments(gname, segs, tuple(color), thickness=0.004, visible=visible)
             obj.grasps.append(handle)
+        self._build_rejected(obj, name)
+
+    def _build_rejected(self, obj: ObjectView, name: str) -> None:
+        """One thin line-segments node per rejection reason: the gripper outlines of the object's rejected
+        candidates (camera-frame TCP poses), in the reason's colour; shown with the ``rejected`` layer."""
+        from centerart.viz.prediction_overlay import OTHER_REASON_COLOR, REASON_COLORS
+
+        rejected = obj.record.get("rejected_grasps") or []
+        for reason in sorted({r["reason"] for r in rejected}):
+            poses = np.asarray([r["camera_T_tcp"] for r in rejected if r["reason"] == reason], float)
+            segs = np.einsum("sej,nij->nsei", GRIPPER_SEGMENTS_TCP, poses[:, :3, :3]) + poses[:, None, None, :3, 3]
+            obj.rejected[reason] = self.server.scene.add_line_segments(
+                f"{name}/rejected/{reason}", segs.reshape(-1, 2, 3).astype(np.float32),
+                REASON_COLORS.get(reason, OTHER_REASON_COLOR), thickness=0.0015, visible=self.layers["rejected"],
+            )  # fmt: skip
 
     def _add_mesh(self, k: int, mesh: trimesh.Trimesh) -> None:
         """Add (or replace) object k's mesh node, keeping the mesh layer's visibility."""
@@ -329,13 +387,19 @@ class Viewer:
         )
         with gui.add_folder("Layers"):
             for key in LAYERS:
-                box = gui.add_checkbox(key, True)
+                box = gui.add_checkbox(key, self.layers[key], hint=LAYER_HINTS.get(key))
                 box.on_update(lambda event, key=key: self.set_layer(key, event.target.value))
                 self.gui[key] = box
             self.gui["top_k"] = gui.add_slider(
                 "top-k grasps", min=0, max=n_grasps, step=1, initial_value=min(self.cfg.top_k, n_grasps)
             )
             self.gui["top_k"].on_update(lambda event: self.set_top_k(event.target.value))
+            self.gui["grasp_colors"] = gui.add_dropdown(
+                "grasp colour", ("score", "source"), initial_value=self.grasp_colors,
+                hint="kept grasps by score (violet low, orange high) or by source (decoder blue, observed green, "
+                "handle orange)",
+            )  # fmt: skip
+            self.gui["grasp_colors"].on_update(lambda event: self.set_grasp_colors(event.target.value))
             self.gui["point_size"] = gui.add_slider(
                 "point size (m)", min=0.001, max=0.02, step=0.001, initial_value=float(self.cfg.point_size)
             )
@@ -350,6 +414,8 @@ class Viewer:
             with gui.add_folder(title):
                 state = f"{joint.get('state', float('nan')):.3f} {joint.get('unit', '')}"
                 gui.add_markdown(f"predicted state {state} (normalized {obj.joint:.2f}), {len(obj.grasps)} grasps")
+                if (summary := anchoring_markdown(rec)) is not None:
+                    gui.add_markdown(summary)
                 show = gui.add_checkbox("show", True)
                 show.on_update(lambda event, k=k: self.set_object_visible(k, event.target.value))
                 slider = gui.add_slider(
@@ -371,6 +437,11 @@ class Viewer:
         if key == "grasps":
             self.set_top_k(self.top_k)
             return
+        if key == "rejected":
+            for obj in self.objects:
+                for handle in obj.rejected.values():
+                    handle.visible = visible
+            return
         node_key = {"meshes": "mesh", "axes": "axis", "frames": "frame"}[key]
         for obj in self.objects:
             if node_key in obj.nodes:
@@ -382,6 +453,17 @@ class Viewer:
         for obj in self.objects:
             for r, handle in enumerate(obj.grasps):
                 handle.visible = self.layers["grasps"] and r < self.top_k
+
+    def set_grasp_colors(self, mode: str) -> None:
+        """Colour every object's kept grasps by ``score`` or by ``source`` (grasps without one: by score)."""
+        self.grasp_colors = mode
+        for obj in self.objects:
+            colors = grasp_colors(obj.record.get("grasps") or [], mode)
+            for handle, color in zip(obj.grasps, colors, strict=True):
+                if self.cfg.grasp_style == "mesh":
+                    handle.color = tuple(int(c) for c in color)
+                else:
+                    handle.colors = np.broadcast_to(np.asarray(color, np.uint8), handle.colors.shape).copy()
 
     def _set_point_size(self, size: float) -> None:
         if "points" in self.nodes:
