@@ -101,7 +101,7 @@ class _Predictor:
     def __init__(self, preds):
         self.preds, self.timing = preds, {}
 
-    def predict(self, rgb, depth, K, encoded=None):
+    def predict(self, rgb, depth, K, encoded=None, gravity=None):
         return self.preds
 
     def predict_detection(self, det, rgb, depth, K):  # the true pose swapped in: grasp x = 99 (fails)

@@ -113,7 +113,8 @@ def test_ladder_settings_add_one_lever_each():
     full = anchoring_setting("full")
     assert full == AnchoringConfig()
     on = [anchoring_setting(n) for n in LADDER]
-    assert [c.snap for c in on] == [False, False, True, True, True, True, True]
+    assert [c.snap for c in on] == [False, False, True, True, True, True, True, True]
+    assert [c.use_ranker for c in on] == [False] * 6 + [True, True]
     assert [c.observed_candidates for c in on][-3:] == [True, True, True]
     with pytest.raises(ValueError, match="grasp setting"):
         anchoring_setting("everything")

@@ -37,7 +37,7 @@ from centerart.utils.folders import check_output_folder
 
 REFINE_METHODS = {"none": "centerart", "icp": "centerart+icp", "sdf": "centerart+sdf"}
 #: Grasp settings of the learned method (``inference.grasp_anchoring.LADDER``); ``full`` is the predictor's default.
-GraspSetting = Literal["proposal", "checks", "snap", "square", "observed", "handle", "full"]
+GraspSetting = Literal["proposal", "checks", "snap", "square", "observed", "handle", "full", "pose"]
 
 
 def method_name(refine: str, grasps: str) -> str:
@@ -64,8 +64,9 @@ class EvalScenesConfig:
     """Refinement settings of the learned method, each a row (sdf costs about 20 s per image on CPU)."""
     grasps: tuple[GraspSetting, ...] = ("full",)
     """Grasp settings of the learned method, each a row: ``full`` (the default: grasps made on, snapped to, checked
-    against and ranked on the observed points), ``proposal`` (the decoder's grasps alone), or a step between
-    (``inference.grasp_anchoring.anchoring_setting``)."""
+    against and ranked on the observed points), ``proposal`` (the decoder's grasps alone), a step between, or
+    ``pose`` (``full`` after the pose is corrected from the depth, with the camera's true gravity as a robot has it
+    from TF) (``inference.grasp_anchoring.LADDER``)."""
     shape_prior: Literal["regressed", "nearest", "best_fit"] = "regressed"
     """The predictor's shape code: the encoder's regression, or snapped to a decoder training code
     (``inference.shape_prior``)."""
@@ -123,7 +124,7 @@ _PREDICTORS: dict = {}
 
 def predictor_for(cfg: dict, refine: str, grasps: str = "full"):
     """The predictor of one refinement and grasp setting, loaded once per process."""
-    from centerart.inference.grasp_anchoring import anchoring_setting
+    from centerart.inference.grasp_anchoring import ladder_predictor_settings
     from centerart.inference.predictor import Predictor, PredictorConfig
     from centerart.inference.refinement import RefineConfig, SdfRefineConfig
 
@@ -133,7 +134,7 @@ def predictor_for(cfg: dict, refine: str, grasps: str = "full"):
             refine=RefineConfig(icp=refine == "icp"),
             refine_sdf=SdfRefineConfig(enabled=refine == "sdf"),
             shape_prior=cfg["shape_prior"],
-            anchoring=anchoring_setting(grasps),
+            **ladder_predictor_settings(grasps),
         )
         _PREDICTORS[key] = Predictor(cfg["encoder"], cfg["decoder"], config=config)
     return _PREDICTORS[key]

@@ -26,6 +26,7 @@ from centerart.evaluation.metrics import nearest_label_position_m, relaxed_succe
 from centerart.evaluation.physics_scene import PhysicsScene
 from centerart.evaluation.trials import any_of_top, execute_grasp, full_open, oracle_trial
 from centerart.geometry.camera import backproject_depth
+from centerart.geometry.gravity import gravity_from_world_T_camera
 from centerart.geometry.matching import match_points
 from centerart.grasps.executor import commanded_direction
 from centerart.models.encoder.readout import Detection
@@ -233,7 +234,10 @@ def learned_rows(ctx: SceneContext, v: ViewInput, predictor, method: str, shape:
     """Rows of the learned method (3-D match and image association, see the module docstring), plus the image's
     detection counts (3-D match) and latency. ``encoded``: the image's encoder pass (``Predictor.encode``), shared
     by the grasp settings of one evaluation."""
-    preds = predictor.predict(v.rgb, v.depth, v.K, encoded=encoded)
+    # Gravity as a robot knows it (TF / IMU): the camera's true orientation; only the pose correction reads it.
+    preds = predictor.predict(
+        v.rgb, v.depth, v.K, encoded=encoded, gravity=gravity_from_world_T_camera(v.world_T_camera)
+    )
     image = {"scene": v.scene, "view": v.view, "depth": v.depth_mode, "method": method}
     image.update(counts=view_metrics(preds, v.labels)["counts"], timing_s=dict(predictor.timing))
     match, by_image = match_predictions(v, preds), associate_by_image(v, preds)

@@ -339,18 +339,19 @@ def leverage_cue(view: ObjectView, poses: np.ndarray) -> np.ndarray:
 
 #: Named anchoring settings, cumulative (each adds one lever to the one before): the ladder of the evaluation
 #: (``centerart eval scenes --grasps``) and of ``benchmarks/results/``. ``full`` is the predictor's default.
-LADDER = ("proposal", "checks", "snap", "square", "observed", "handle", "full")
+LADDER = ("proposal", "checks", "snap", "square", "observed", "handle", "full", "pose")
 
 
 def anchoring_setting(name: str) -> AnchoringConfig:
     """The anchoring of one ladder step (see :data:`LADDER`): ``proposal`` is off (the decoder's grasps through
     the proposal's collision filter); ``checks`` verifies the decoder's grasps where they are; ``snap`` moves them
     onto the material first; ``square`` adds their front-plane-squared twins; ``observed`` adds the SGDF's grasps
-    at the observed points; ``handle`` adds grasps across handles; ``full`` ranks with the cues (before it, by
-    the critic alone)."""
+    at the observed points; ``handle`` adds grasps across handles; ``full`` ranks with the cues, or the
+    anchored-grasp ranker where the checkpoint has one (before it, by the critic alone); ``pose`` is ``full`` with
+    the pose corrected from the depth first (a predictor setting: :func:`ladder_predictor_settings`)."""
     if name not in LADDER:
         raise ValueError(f"grasp setting {name!r}: expected one of {', '.join(LADDER)}")
-    step = LADDER.index(name)
+    step = min(LADDER.index(name), LADDER.index("full"))
     return AnchoringConfig(
         enabled=step >= 1,
         snap=step >= 2,
@@ -360,4 +361,10 @@ def anchoring_setting(name: str) -> AnchoringConfig:
         handle_weight=1.0 if step >= 6 else 0.0,
         leverage_floor=0.3 if step >= 6 else 1.0,
         facing_floor=0.2 if step >= 6 else 1.0,
+        use_ranker=step >= 6,
     )
+
+
+def ladder_predictor_settings(name: str) -> dict:
+    """``PredictorConfig`` fields of one ladder step: its anchoring, and the pose correction from ``pose`` on."""
+    return {"anchoring": anchoring_setting(name), "pose_from_depth": LADDER.index(name) >= LADDER.index("pose")}
