@@ -140,6 +140,7 @@ def main() -> None:
     ap.add_argument("--depth", default="realistic,true", help="depth modes (collect)")
     ap.add_argument("--top-k", type=int, default=20, help="kept grasps executed per object (collect)")
     ap.add_argument("--shard", default="0/1", help="collect: K/N takes every N-th scene from the K-th")
+    ap.add_argument("--save", action="store_true", help="fit: write the ranker beside the checkpoint")
     ap.add_argument("--threads", type=int, default=1)
     args = ap.parse_args()
     import torch

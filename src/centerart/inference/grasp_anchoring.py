@@ -40,7 +40,13 @@ from centerart.inference.decoder_grasps import (
     joint_sdf_change,
     nms_grasps,
 )
-from centerart.inference.handles import HANDLE_MAX_HEIGHT_M, grasp_across, handle_clusters
+from centerart.inference.handles import (
+    HANDLE_MAX_HEIGHT_M,
+    face_noise,
+    grasp_across,
+    handle_clusters,
+    handle_min_height,
+)
 from centerart.inference.observed_checks import (
     ObservedCheckConfig,
     closing_points,
@@ -55,6 +61,8 @@ from centerart.models.grasp_critic import ANCHOR_FEATURES, GRASP_FEATURES
 SOURCES = ("decoder", "observed", "handle")
 #: RANSAC inlier distance (m) of an object's front plane (the baseline's).
 FRONT_PLANE_DISTANCE_M = 0.01
+#: Depth noise (m) assumed where an object has no front plane to measure it on (stereo-like: the safer guess).
+DEFAULT_NOISE_M = 0.01
 
 
 @dataclass(frozen=True)
@@ -184,7 +192,9 @@ def candidate_set(view: ObjectView, decoded_camera: np.ndarray, plane, cfg: Anch
     if cfg.square and plane is not None:
         for name in ("decoder", "observed"):
             groups[name] = np.concatenate([groups[name], squared_to_plane(groups[name], plane[0])])
-    handles = handle_clusters(view.observed, *plane) if (cfg.handle_candidates and plane is not None) else []
+    handles = []
+    if cfg.handle_candidates and plane is not None:
+        handles = handle_clusters(view.observed, *plane, min_height=handle_min_height(view.observed, *plane))
     groups["handle"] = np.array([grasp_across(c, plane[0]) for c in handles]).reshape(-1, 4, 4)
     poses = np.concatenate([groups[s] for s in SOURCES])
     sources = np.array([s for s in SOURCES for _ in range(len(groups[s]))], dtype=object)
@@ -208,7 +218,8 @@ def anchor_grasps(
     reasons = np.full(len(poses), "", dtype=object)
     shift = np.zeros(len(poses))
     if cfg.snap:
-        snapped = [snap_to_material(p, object_tree, cfg.checks) for p in poses]
+        noise = face_noise(observed, *plane) if plane is not None else DEFAULT_NOISE_M
+        snapped = [snap_to_material(p, object_tree, cfg.checks, noise) for p in poses]
         reasons[[s is None for s in snapped]] = "far_from_material"
         moved = np.array([p if s is None else s for p, s in zip(poses, snapped, strict=True)])
         shift = np.linalg.norm(moved[:, :3, 3] - poses[:, :3, 3], axis=1)
@@ -306,11 +317,13 @@ def decoder_features(view: ObjectView, poses_camera: np.ndarray) -> np.ndarray:
 
 
 def handle_cue(poses: np.ndarray, plane, object_tree: cKDTree) -> np.ndarray:
-    """(K,) in [0, 1]: how far the material between each grasp's pads stands proud of the object's front plane
-    (0 at 5 mm or less, 1 at 2 cm and up to the handle band's top; 0 without a plane)."""
+    """(K,) in [0, 1]: how far the material between each grasp's pads stands proud of the object's front plane,
+    above the depth noise (0 at :func:`~.handles.handle_min_height` or less, 1 from 1.5 cm above it up to the
+    handle band's top; 0 without a plane)."""
     if plane is None:
         return np.zeros(len(poses))
     normal, offset = plane
+    floor = handle_min_height(object_tree.data, normal, offset)
     out = np.zeros(len(poses))
     for k, pose in enumerate(poses):
         near = object_tree.data[object_tree.query_ball_point(pose[:3, 3], 0.03)]
@@ -318,7 +331,7 @@ def handle_cue(poses: np.ndarray, plane, object_tree: cKDTree) -> np.ndarray:
         between = near[(np.abs(local[:, 0]) < 0.01) & (np.abs(local[:, 1]) < 0.035) & (np.abs(local[:, 2]) < 0.02)]
         if len(between):
             h = float(np.median(between @ normal + offset))
-            out[k] = np.clip((h - 0.005) / 0.015, 0.0, 1.0) if h <= HANDLE_MAX_HEIGHT_M else 0.0
+            out[k] = np.clip((h - floor) / 0.015, 0.0, 1.0) if h <= HANDLE_MAX_HEIGHT_M else 0.0
     return out
 
 

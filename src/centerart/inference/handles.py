@@ -21,12 +21,15 @@ CLUSTER_MIN_POINTS = 15
 GRASP_DEPTH_M = 0.01
 
 
-def handle_clusters(points: np.ndarray, normal: np.ndarray, offset: float) -> list[np.ndarray]:
-    """Handle point clusters (each (M, 3)), largest first."""
+def handle_clusters(
+    points: np.ndarray, normal: np.ndarray, offset: float, min_height: float = HANDLE_MIN_HEIGHT_M
+) -> list[np.ndarray]:
+    """Handle point clusters (each (M, 3)), largest first: points ``min_height``-HANDLE_MAX_HEIGHT_M (m) proud of
+    the plane ``(normal, offset)``, clustered by DBSCAN."""
     import open3d as o3d
 
     height = points @ normal + offset
-    candidates = points[(height > HANDLE_MIN_HEIGHT_M) & (height < HANDLE_MAX_HEIGHT_M)]
+    candidates = points[(height > min_height) & (height < HANDLE_MAX_HEIGHT_M)]
     if len(candidates) < CLUSTER_MIN_POINTS:
         return []
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(candidates))
@@ -48,3 +51,24 @@ def grasp_across(cluster: np.ndarray, normal: np.ndarray) -> np.ndarray:
     pose[:3, :3] = np.column_stack([x, np.cross(z, x), z])
     pose[:3, 3] = cluster.mean(axis=0) + z * GRASP_DEPTH_M
     return pose
+
+
+#: Robust depth noise (m) of a face: 1.4826 x the median absolute height of the points within this band of its
+#: plane; a handle must stand NOISE_SIGMAS of it proud (stereo depth: about 1 cm, so 3 cm; true depth: 1.5 cm).
+NOISE_BAND_M = 0.03
+NOISE_SIGMAS = 3.0
+
+
+def face_noise(points: np.ndarray, normal: np.ndarray, offset: float) -> float:
+    """Robust spread (m) of the observed points about the face plane (see :data:`NOISE_BAND_M`); 0 without points."""
+    height = np.asarray(points, float) @ normal + offset
+    near = np.abs(height[np.abs(height) < NOISE_BAND_M])
+    return float(1.4826 * np.median(near)) if len(near) else 0.0
+
+
+def handle_min_height(points: np.ndarray, normal: np.ndarray, offset: float) -> float:
+    """How far (m) material must stand proud of this face to be a handle rather than depth noise: at least
+    HANDLE_MIN_HEIGHT_M, and NOISE_SIGMAS x :func:`face_noise`. Why: stereo depth scatters a flat door by 1-2 cm
+    (measured on rendered kitchens: median |error| 0.7-1.8 cm, 10th percentile 2-4 cm in front), which the fixed
+    1.5 cm band calls handles everywhere; real handles stand 3-6 cm proud."""
+    return max(HANDLE_MIN_HEIGHT_M, NOISE_SIGMAS * face_noise(points, normal, offset))
