@@ -69,7 +69,7 @@ def collect(args) -> dict:
     dirs = sorted(d for folder in args.scenes for d in Path(folder).glob("scene_*") if (d / "scene.json").is_file())
     done = 0
     for d in dirs[k::n]:
-        path = args.out / f"{d.parent.name}_{d.name}.json"
+        path = args.out / f"{d.parent.parent.name}_{d.parent.name}_{d.name}.json"
         if not path.is_file():
             atomic_write_json(path, collect_scene(d, predictor, tuple(args.depth.split(","))))
             done += 1

@@ -52,6 +52,10 @@ class PredictConfig:
     meshes: bool = True
     """Decode and write each object's mesh (costs about a second per object on a CPU)."""
     predictor: PredictorConfig = field(default_factory=PredictorConfig)
+    gravity: tuple[float, float, float] | None = None
+    """The downward direction in the camera frame (OpenCV: x right, y down, z forward), e.g. from TF or the
+    camera's IMU; any length. Used by the pose correction (--predictor.pose-from-depth), which then keeps objects
+    upright and corrects only their yaw and position."""
     show_rejected: bool = False
     """Also draw the grasp candidates that anchoring rejected on overlay.png, coloured by reason (a legend says
     which); predictions.json keeps them either way (``rejected_grasps``)."""
@@ -60,6 +64,10 @@ class PredictConfig:
 
     def __post_init__(self):
         positive("--depth-scale", self.depth_scale, allow_none=True)
+        if self.gravity is not None and not (
+            np.all(np.isfinite(self.gravity)) and np.linalg.norm(np.asarray(self.gravity, float)) > 1e-9
+        ):
+            raise CenterArtError(f"--gravity: expected a non-zero direction of 3 finite numbers, got {self.gravity}")
 
 
 def resolve_inputs(cfg: PredictConfig):
@@ -148,6 +156,6 @@ def run_predict(cfg: PredictConfig) -> dict:
     rgb, depth, camera, sources = resolve_inputs(cfg)
     depth = check_inputs(rgb, depth, camera)  # before loading any model: a bad input is reported at once
     predictor = Predictor(cfg.encoder, cfg.decoder, cfg.device, cfg.predictor)
-    preds = predictor.predict(rgb, depth, camera)
+    preds = predictor.predict(rgb, depth, camera, gravity=cfg.gravity)
     with atomic_directory(out) as tmp:
         return write_outputs(tmp, predictor, preds, rgb, depth, camera, cfg, sources)

@@ -493,6 +493,8 @@ CASES = [
     Case("predict-intrinsics-width-text", predict(intrinsics=intrinsics_with(["width"], "abc")), "intrinsics"),
     Case("predict-intrinsics-K-string", predict(intrinsics=intrinsics_with(["K"], "abc")), "intrinsics"),
     Case("predict-intrinsics-list", predict(intrinsics=written("k.json", lambda p: p.write_text("[1, 2]"))), "k.json"),
+    Case("predict-gravity-zero", predict(extra=("--gravity", "0", "0", "0")), "--gravity"),
+    Case("predict-gravity-nan", predict(extra=("--gravity", "nan", "1", "0")), "--gravity"),
     # ---------------------------------------------------------------- view
     Case("view-missing-folder", view(lambda fx, t: str(t / "nope")), "nope"),
     Case("view-predictions-random", view(prediction_with(d.RANDOM.decode("latin-1"))), "predictions.json"),
