@@ -118,3 +118,12 @@ def test_ladder_settings_add_one_lever_each():
     assert [c.observed_candidates for c in on][-3:] == [True, True, True]
     with pytest.raises(ValueError, match="grasp setting"):
         anchoring_setting("everything")
+
+
+def test_first_surface_is_a_point_of_the_column_even_with_a_gap_behind_the_front():
+    """Two stray points 3 cm in front of a surface: the slab never comes out empty (no NaN pose)."""
+    from centerart.inference.observed_checks import first_surface
+
+    z = np.concatenate([[-0.05, -0.049], np.full(40, -0.02)])
+    front = first_surface(z, noise_m=0.0)
+    assert np.isfinite(front) and front == pytest.approx(-0.02)

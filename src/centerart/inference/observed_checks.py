@@ -85,7 +85,7 @@ def first_surface(z: np.ndarray, noise_m: float) -> float:
     either: a door face behind a thin handle holds most of the column's points. So: the median of the points in
     a slab starting at the 5th percentile, 2 sigma thick (4 mm to 2 cm: clean depth keeps the front face's own
     depth, stereo depth its middle)."""
-    start = float(np.quantile(z, FRONT_QUANTILE))
+    start = float(np.quantile(z, FRONT_QUANTILE, method="lower"))  # a point's own value: the slab is never empty
     slab = float(np.clip(FRONT_SLAB_SIGMAS * noise_m, *FRONT_SLAB_RANGE_M))
     return float(np.median(z[(z >= start) & (z <= start + slab)]))
 
@@ -107,7 +107,7 @@ def snap_to_material(
     # The material the pads will meet: from the front surface back over a pad length.
     part = column[(column[:, 2] >= front - 0.005) & (column[:, 2] <= front + FINGER_PAD_LENGTH)]
     shift_y = float(np.median(part[:, 1]))
-    if abs(shift_z) > cfg.max_shift_approach_m or abs(shift_y) > cfg.max_shift_closing_m:
+    if not abs(shift_z) <= cfg.max_shift_approach_m or not abs(shift_y) <= cfg.max_shift_closing_m:  # NaN too
         return None
     snapped = pose.copy()
     snapped[:3, 3] = pose[:3, 3] + pose[:3, :3] @ np.array([0.0, shift_y, shift_z])
