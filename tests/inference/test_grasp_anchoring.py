@@ -52,7 +52,7 @@ def anchored(candidates, cfg=None):
     return anchor_grasps(view, np.array(candidates), cKDTree(points), None, cfg, top_k=10)
 
 
-ON_HANDLE = (HANDLE_X, 0.0, HANDLE_FRONT_Z + 0.01)
+ON_HANDLE = (HANDLE_X, 0.0, HANDLE_FRONT_Z + ObservedCheckConfig().grasp_depth_m)
 
 
 def test_a_grasp_on_the_handle_is_kept_where_it_is():

@@ -51,8 +51,8 @@ from centerart.inference.observed_checks import (
     ObservedCheckConfig,
     closing_points,
     collision_points,
+    points_between_pads,
     snap_to_material,
-    to_tcp_frame,
 )
 from centerart.inference.reconstruction import decoder_field
 from centerart.models.decoder import decode_outputs
@@ -227,7 +227,7 @@ def anchor_grasps(
     ok = reasons == ""
     counts["snapped"] = int(ok.sum())
     between = np.zeros(len(poses), int)
-    between[ok] = closing_points(poses[ok], object_tree)
+    between[ok] = closing_points(poses[ok], object_tree, cfg.checks.grasp_depth_m)
     reasons[ok & (between < cfg.checks.min_closing_points)] = "no_material_between_pads"
     ok = reasons == ""
     counts["material_between_pads"] = int(ok.sum())
@@ -238,7 +238,8 @@ def anchor_grasps(
     counts["clear"] = int(ok.sum())
     scores, features = np.zeros(len(poses)), np.zeros((len(poses), len(ANCHOR_FEATURES)))
     if ok.any():
-        extra = {"closing": between[ok], "shift": shift[ok], "sources": np.asarray(sources)[ok]}
+        extra = {"closing": between[ok], "shift": shift[ok], "sources": np.asarray(sources)[ok],
+                 "grasp_depth": cfg.checks.grasp_depth_m}  # fmt: skip
         features[ok] = anchor_features(view, poses[ok], plane, object_tree, extra)
         scores[ok] = rank_scores(features[ok], critics, cfg)
     return _result(poses, scores, sources, between, list(reasons), counts, top_k, features)
@@ -274,7 +275,7 @@ def anchor_features(view: ObjectView, poses: np.ndarray, plane, object_tree: cKD
     rays = poses[:, :3, 3] / np.maximum(np.linalg.norm(poses[:, :3, 3], axis=1, keepdims=True), 1e-9)
     columns = [
         decoder_features(view, poses),
-        handle_cue(poses, plane, object_tree)[:, None],
+        handle_cue(poses, plane, object_tree, extra["grasp_depth"])[:, None],
         leverage_cue(view, poses)[:, None],
         np.clip(np.einsum("ki,ki->k", poses[:, :3, 2], rays), 0.0, 1.0)[:, None],
         np.log1p(np.asarray(extra["closing"], float))[:, None],
@@ -316,19 +317,17 @@ def decoder_features(view: ObjectView, poses_camera: np.ndarray) -> np.ndarray:
     return grasp_features(view.decoder, view.code, view.joint, poses, offset, tcp_sdf, change, view.device)
 
 
-def handle_cue(poses: np.ndarray, plane, object_tree: cKDTree) -> np.ndarray:
-    """(K,) in [0, 1]: how far the material between each grasp's pads stands proud of the object's front plane,
-    above the depth noise (0 at :func:`~.handles.handle_min_height` or less, 1 from 1.5 cm above it up to the
-    handle band's top; 0 without a plane)."""
+def handle_cue(poses: np.ndarray, plane, object_tree: cKDTree, grasp_depth: float = 0.02) -> np.ndarray:
+    """(K,) in [0, 1]: how far the material between each grasp's pads (:func:`~.observed_checks.points_between_pads`)
+    stands proud of the object's front plane, above the depth noise (0 at :func:`~.handles.handle_min_height` or
+    less, 1 from 1.5 cm above it up to the handle band's top; 0 without a plane)."""
     if plane is None:
         return np.zeros(len(poses))
     normal, offset = plane
     floor = handle_min_height(object_tree.data, normal, offset)
     out = np.zeros(len(poses))
     for k, pose in enumerate(poses):
-        near = object_tree.data[object_tree.query_ball_point(pose[:3, 3], 0.03)]
-        local = to_tcp_frame(pose, near)
-        between = near[(np.abs(local[:, 0]) < 0.01) & (np.abs(local[:, 1]) < 0.035) & (np.abs(local[:, 2]) < 0.02)]
+        between = points_between_pads(pose, object_tree, grasp_depth)
         if len(between):
             h = float(np.median(between @ normal + offset))
             out[k] = np.clip((h - floor) / 0.015, 0.0, 1.0) if h <= HANDLE_MAX_HEIGHT_M else 0.0
