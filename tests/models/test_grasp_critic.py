@@ -80,3 +80,24 @@ def test_damaged_critic_is_one_clear_error(change, message):
     change(d)
     with pytest.raises(CenterArtError, match=message):
         GraspCritic.from_dict(json.loads(json.dumps(d)), "c.json")
+
+
+def test_anchor_ranker_is_its_own_kind_beside_the_checkpoint(tmp_path):
+    """The anchored-grasp ranker: ANCHOR_FEATURES, its own file; a grasp critic is not taken for one."""
+    from centerart.models.grasp_critic import ANCHOR_FEATURES
+
+    ckpt = tmp_path / "decoder.pt"
+    ckpt.write_bytes(b"weights")
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=(400, len(ANCHOR_FEATURES)))
+    y = rng.random(400) < 1.0 / (1.0 + np.exp(-2.0 * x[:, ANCHOR_FEATURES.index("handle_cue")]))
+    ranker = fit_critic(x, y, names=ANCHOR_FEATURES)
+    assert ranker.weights[ANCHOR_FEATURES.index("handle_cue")] > 1.0
+    with pytest.raises(ValueError, match="anchor_critic"):
+        save_critic(fit_critic(*_data(300, 8)), ckpt, "anchor_critic")
+    path = save_critic(ranker, ckpt, "anchor_critic")
+    assert path.name == "decoder.pt.anchor_critic.json" and load_critic(ckpt) is None
+    assert np.allclose(load_critic(ckpt, "anchor_critic").probability(x[:5]), ranker.probability(x[:5]))
+    path.write_text(path.read_text().replace('"handle_cue"', '"other"'))
+    with pytest.raises(CenterArtError, match="anchor_critic.json: features"):
+        load_critic(ckpt, "anchor_critic")
