@@ -5,8 +5,9 @@
 
 Stages: ``encoder_s`` (letterbox, network, peaks, read-out, masks), ``grasps_s`` (decoder: surface shell at
 ``grasp_resolution`` + grasp extraction, all objects), ``refine_s`` (ICP, only with --icp), ``filter_s`` (grasp
-collision check), ``total_s`` (all of these), and ``meshes_s`` (every object's mesh at ``mesh_resolution``,
-decoded on demand after the prediction). The first image (warm-up) is excluded.
+anchoring in the observed depth, or with --no-anchoring the proposal's collision check), ``total_s`` (all of
+these), and ``meshes_s`` (every object's mesh at ``mesh_resolution``, decoded on demand after the prediction).
+The first image (warm-up) is excluded.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import numpy as np
 import torch
 
 from bench_report import emit
+from centerart.inference.grasp_anchoring import AnchoringConfig
 from centerart.inference.predictor import Predictor, PredictorConfig
 from centerart.inference.refinement import RefineConfig
 from centerart.scenes.dataset import load_view
@@ -39,12 +41,14 @@ def main() -> None:
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--runtime", choices=["auto", "torch", "onnxruntime"], default="auto")
     ap.add_argument("--no-batch", action="store_true", help="decode objects one after the other")
+    ap.add_argument("--no-anchoring", action="store_true", help="the decoder's grasps alone (collision filter)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     cfg = replace(
-        PredictorConfig(), refine=RefineConfig(icp=args.icp), runtime=args.runtime, batch_objects=not args.no_batch
-    )
+        PredictorConfig(), refine=RefineConfig(icp=args.icp), runtime=args.runtime, batch_objects=not args.no_batch,
+        anchoring=AnchoringConfig(enabled=not args.no_anchoring),
+    )  # fmt: skip
     predictor = Predictor(device=args.device, config=cfg)
     views = collect_views(args.scenes)
     step = max(1, len(views) // (args.views + 1))
@@ -74,6 +78,7 @@ def main() -> None:
             "icp": args.icp,
             "decoder_runtime": type(predictor.fast_decoder).__name__,
             "batch_objects": cfg.batch_objects,
+            "anchoring": cfg.anchoring.enabled,
         },
         "median_seconds_by_objects_found": groups,
         "per_image": rows,
