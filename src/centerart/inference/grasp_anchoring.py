@@ -85,6 +85,9 @@ class AnchoringConfig:
     """Each query point also moved this far toward the camera (grasp centres sit in front of a closed door)."""
     max_offset_m: float = 0.03
     """An observed query whose predicted grasp is further away votes for none (the field means "elsewhere")."""
+    observed_at_point: bool = False
+    """Place each observed candidate at its query point (oriented by the field) instead of at the grasp the field
+    points to."""
     observed_pool: int = 40
     """Observed candidates kept after non-maximum suppression."""
     handle_weight: float = 1.0
@@ -147,10 +150,15 @@ def observed_field_candidates(view: ObjectView, cfg: AnchoringConfig) -> np.ndar
     offset, rot = out.offset.numpy().astype(float), out.rotation.numpy().astype(float)
     off = np.linalg.norm(offset, axis=1)
     ext = GraspExtractionConfig()
-    keep = np.flatnonzero((off < cfg.max_offset_m) & (np.abs(sdf) < ext.surface_band))
+    if cfg.observed_at_point:  # the grasp at the observed point itself, oriented by the field (snapped later)
+        keep = np.flatnonzero(np.abs(sdf) < ext.surface_band)
+        pos = q[keep]
+    else:
+        keep = np.flatnonzero((off < cfg.max_offset_m) & (np.abs(sdf) < ext.surface_band))
+        pos = q[keep] + offset[keep]
     if len(keep) == 0:
         return np.zeros((0, 4, 4))
-    pos, rot, off = q[keep] + offset[keep], rot[keep], off[keep]
+    rot, off = rot[keep], off[keep]
     _, change = joint_sdf_change(view.decoder, view.code, view.joint, pos, ext.moving_delta, view.device)
     moving = change > ext.moving_sdf_change
     pos, rot, off = pos[moving], rot[moving], off[moving]
