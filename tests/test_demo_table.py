@@ -28,7 +28,7 @@ def test_top_grasp_check():
     assert top_grasp_check({"grasps": [{"source": "decoder", "closing_points": 3}]}, 8)["top_grasp_on_material"] == "no"
     off = top_grasp_check({"grasps": [{"score": 0.5}]}, 8)
     assert off == {"top_grasp_source": None, "top_grasp_on_material": "n/a"}
-    assert top_grasp_check({"grasps": []}, 8)["top_grasp_on_material"] == "n/a"
+    assert top_grasp_check({"grasps": []}, 8)["top_grasp_on_material"] == "no grasp"
     assert min_closing_points({"config": {"anchoring": {"checks": {"min_closing_points": 20}}}}) == 20
     assert min_closing_points({}) == 8  # an older record: the default threshold
 

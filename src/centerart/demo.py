@@ -125,9 +125,11 @@ def top_grasp_check(obj: dict, min_points: int) -> dict:
     """Of one predicted object (a predictions.json object): where its top grasp came from (``decoder``,
     ``observed``, ``handle``; None without anchoring) and whether it touches observed material: "yes" when at least
     ``min_points`` observed points of the object lie between its pads, "no" when fewer, "n/a" when anchoring was
-    off (no closing points saved) or there is no grasp."""
+    off (no closing points saved), "no grasp" when the object has none."""
     top = (obj.get("grasps") or [None])[0]
-    if top is None or "closing_points" not in top:
+    if top is None:
+        return {"top_grasp_source": None, "top_grasp_on_material": "no grasp"}
+    if "closing_points" not in top:
         return {"top_grasp_source": None if top is None else top.get("source"), "top_grasp_on_material": "n/a"}
     on = "yes" if int(top["closing_points"]) >= min_points else "no"
     return {"top_grasp_source": top.get("source"), "top_grasp_on_material": on}
