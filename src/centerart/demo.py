@@ -14,9 +14,14 @@ Every step calls the same code as the stage commands, at a small scale.
 
 from __future__ import annotations
 
+import json
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
+
+from centerart.geometry.gravity import gravity_from_world_T_camera
 
 MATCH_DISTANCE_M = 0.10  # the evaluation's 3-D centre match distance (m), reported per object
 
@@ -72,9 +77,11 @@ def predict_unseen_kitchen(cfg: DemoConfig, out: Path) -> dict:
     )  # fmt: skip
     view = list_views(scenes)[0]
     print("2/5 prediction with the shipped encoder and decoder")
+    # The camera's gravity direction, as a robot has it from TF: objects' poses are then corrected from the depth.
+    world_T_camera = np.asarray(json.loads((view / "labels.json").read_text())["world_T_camera"], float)
     record = run_predict(
         PredictConfig(rgb=view / "rgb.png", depth=view / "depth_realistic.png", intrinsics=view / "labels.json",
-                      out=out / "predict")
+                      out=out / "predict", gravity=tuple(gravity_from_world_T_camera(world_T_camera).tolist()))
     )  # fmt: skip
     return write_comparison(record, view, out / "predict" / "comparison.json")
 

@@ -54,8 +54,8 @@ class PredictConfig:
     predictor: PredictorConfig = field(default_factory=PredictorConfig)
     gravity: tuple[float, float, float] | None = None
     """The downward direction in the camera frame (OpenCV: x right, y down, z forward), e.g. from TF or the
-    camera's IMU; any length. Used by the pose correction (--predictor.pose-from-depth), which then keeps objects
-    upright and corrects only their yaw and position."""
+    camera's IMU; any length. With it, each object's pose is corrected from the depth before its grasps are placed
+    (--predictor.pose-from-depth auto), kept upright, only its yaw and position changed."""
     show_rejected: bool = False
     """Also draw the grasp candidates that anchoring rejected on overlay.png, coloured by reason (a legend says
     which); predictions.json keeps them either way (``rejected_grasps``)."""

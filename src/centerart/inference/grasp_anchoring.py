@@ -387,4 +387,4 @@ def anchoring_setting(name: str) -> AnchoringConfig:
 
 def ladder_predictor_settings(name: str) -> dict:
     """``PredictorConfig`` fields of one ladder step: its anchoring, and the pose correction from ``pose`` on."""
-    return {"anchoring": anchoring_setting(name), "pose_from_depth": LADDER.index(name) >= LADDER.index("pose")}
+    return {"anchoring": anchoring_setting(name), "pose_from_depth": "on" if name == "pose" else "off"}

@@ -50,9 +50,12 @@ class PredictorConfig:
     """Pose, shape code and joint code fitted to the observed depth through the decoder (before grasps)."""
     collision: CollisionFilterConfig = field(default_factory=CollisionFilterConfig)
     """The proposal's own collision filter (used when anchoring is off)."""
-    pose_from_depth: bool = False
+    pose_from_depth: Literal["auto", "on", "off"] = "auto"
     """Correct each object's pose against its observed points before its grasps are placed (the decoded visible
-    surface aligned by ICP, upright and yaw-only when gravity is known: :mod:`~.pose_from_depth`)."""
+    surface aligned by ICP; upright and yaw-only when gravity is known: :mod:`~.pose_from_depth`). ``auto``: when
+    a gravity direction is known (given to :meth:`Predictor.predict`, or estimated with ``estimate_gravity``),
+    which is where it was measured to pay (``benchmarks/results/anchoring_ladder/``); ``on``: always (a free 6-DoF
+    alignment without gravity, not measured); ``off``: never."""
     pose_correction: PoseFromDepthConfig = field(default_factory=PoseFromDepthConfig)
     estimate_gravity: bool = False
     """Without a given gravity, estimate it from the image's largest low horizontal plane
@@ -236,7 +239,7 @@ class Predictor:
             if g.shape != (3,) or not np.all(np.isfinite(g)) or np.linalg.norm(g) < 1e-9:
                 raise CenterArtError(f"gravity: expected a non-zero direction (3 numbers), got {gravity!r}")
             return g / np.linalg.norm(g)
-        if self.config.pose_from_depth and self.config.estimate_gravity:
+        if self.config.pose_from_depth != "off" and self.config.estimate_gravity:
             from centerart.geometry.gravity import estimate_gravity
 
             return estimate_gravity(backproject_depth(depth[::2, ::2], camera.scaled(
@@ -308,7 +311,8 @@ class Predictor:
         t = time.perf_counter()
         if cfg.refine.icp and observed is not None:
             pose, info["icp"] = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
-        if cfg.pose_from_depth and observed is not None and len(recon.mesh.faces):
+        correcting = cfg.pose_from_depth == "on" or (cfg.pose_from_depth == "auto" and self.gravity is not None)
+        if correcting and observed is not None and len(recon.mesh.faces):
             surface = recon.mesh.sample(4000, seed=0) if hasattr(recon.mesh, "sample") else recon.mesh.vertices
             pose, info["pose_from_depth"] = correct_pose(surface, pose, observed, self.gravity, cfg.pose_correction)
         t = self._tick("refine_s", t)
