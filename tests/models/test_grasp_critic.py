@@ -99,5 +99,5 @@ def test_anchor_ranker_is_its_own_kind_beside_the_checkpoint(tmp_path):
     assert path.name == "decoder.pt.anchor_critic.json" and load_critic(ckpt) is None
     assert np.allclose(load_critic(ckpt, "anchor_critic").probability(x[:5]), ranker.probability(x[:5]))
     path.write_text(path.read_text().replace('"handle_cue"', '"other"'))
-    with pytest.raises(CenterArtError, match="anchor_critic.json: features"):
+    with pytest.raises(CenterArtError, match=r"anchor_critic\.json: features"):
         load_critic(ckpt, "anchor_critic")
