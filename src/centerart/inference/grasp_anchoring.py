@@ -70,6 +70,8 @@ class AnchoringConfig:
     """Grasps made on, verified against and re-anchored to the observed points (module doc). On by default."""
 
     enabled: bool = True
+    """Anchor the grasps in the observed depth; off: the decoder's grasps alone, through the proposal's collision
+    filter (``PredictorConfig.collision``)."""
     observed_candidates: bool = True
     """Query the SGDF at the object's observed points for candidates (beside the decoded-surface ones)."""
     handle_candidates: bool = True
