@@ -18,6 +18,7 @@ from centerart.inference.grasp_anchoring import (
     anchoring_setting,
     handle_cue,
 )
+from centerart.inference.handles import face_noise, handle_min_height
 from centerart.inference.observed_checks import ObservedCheckConfig, closing_points, collision_points
 
 HANDLE_X, HANDLE_FRONT_Z, DOOR_Z = 0.20, 0.96, 1.00
@@ -103,8 +104,9 @@ def test_handle_candidates_find_the_bar_and_the_cue_prefers_it():
     assert result.sources[0] == "handle"
     np.testing.assert_allclose(result.poses[0, :3, 3], ON_HANDLE, atol=5e-3)
     plane = (np.array([0.0, 0.0, -1.0]), DOOR_Z)  # n . p + d = 0 on the door, n toward the camera
+    floor = handle_min_height(face_noise(door_with_handle(), *plane))
     cue = handle_cue(np.array([grasp(*ON_HANDLE), grasp(-0.10, 0.0, DOOR_Z + 0.01)]), plane,
-                     cKDTree(door_with_handle()))  # fmt: skip
+                     cKDTree(door_with_handle()), floor)  # fmt: skip
     assert cue[0] == pytest.approx(1.0) and cue[1] == pytest.approx(0.0)
 
 

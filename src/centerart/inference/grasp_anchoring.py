@@ -195,8 +195,9 @@ def squared_to_plane(poses: np.ndarray, normal: np.ndarray) -> np.ndarray:
     return out
 
 
-def candidate_set(view: ObjectView, decoded_camera: np.ndarray, plane, cfg: AnchoringConfig):
-    """(poses (C, 4, 4), sources (C,)) of every candidate (module doc, step 1), camera frame."""
+def candidate_set(view: ObjectView, decoded_camera: np.ndarray, plane, noise_m: float, cfg: AnchoringConfig):
+    """(poses (C, 4, 4), sources (C,)) of every candidate (module doc, step 1), camera frame; ``noise_m``: the front
+    face's depth noise (:func:`~.handles.face_noise`)."""
     groups = {"decoder": np.asarray(decoded_camera, float).reshape(-1, 4, 4)}
     groups["observed"] = observed_field_candidates(view, cfg) if cfg.observed_candidates else np.zeros((0, 4, 4))
     if cfg.square and plane is not None:
@@ -204,7 +205,7 @@ def candidate_set(view: ObjectView, decoded_camera: np.ndarray, plane, cfg: Anch
             groups[name] = np.concatenate([groups[name], squared_to_plane(groups[name], plane[0])])
     handles = []
     if cfg.handle_candidates and plane is not None:
-        handles = handle_clusters(view.observed, *plane, min_height=handle_min_height(view.observed, *plane))
+        handles = handle_clusters(view.observed, *plane, min_height=handle_min_height(noise_m))
     groups["handle"] = np.array([grasp_across(c, plane[0]) for c in handles]).reshape(-1, 4, 4)
     poses = np.concatenate([groups[s] for s in SOURCES])
     sources = np.array([s for s in SOURCES for _ in range(len(groups[s]))], dtype=object)
@@ -220,7 +221,9 @@ def anchor_grasps(
     observed = np.asarray(view.observed, float).reshape(-1, 3)
     view.observed = observed
     plane = front_plane(observed, cfg.seed)
-    poses, sources = candidate_set(view, decoded_camera, plane, cfg) if len(observed) else (np.zeros((0, 4, 4)), [])
+    noise = face_noise(observed, *plane) if plane is not None else DEFAULT_NOISE_M
+    empty = (np.zeros((0, 4, 4)), [])
+    poses, sources = candidate_set(view, decoded_camera, plane, noise, cfg) if len(observed) else empty
     counts = {f"candidates_{s}": int(np.sum(np.asarray(sources) == s)) for s in SOURCES}
     if len(poses) == 0:
         return _result(poses, np.zeros(0), sources, np.zeros(0, int), [], counts, top_k)
@@ -228,7 +231,6 @@ def anchor_grasps(
     reasons = np.full(len(poses), "", dtype=object)
     shift = np.zeros(len(poses))
     if cfg.snap:
-        noise = face_noise(observed, *plane) if plane is not None else DEFAULT_NOISE_M
         snapped = [snap_to_material(p, object_tree, cfg.checks, noise) for p in poses]
         reasons[[s is None for s in snapped]] = "far_from_material"
         moved = np.array([p if s is None else s for p, s in zip(poses, snapped, strict=True)])
@@ -249,7 +251,7 @@ def anchor_grasps(
     scores, features = np.zeros(len(poses)), np.zeros((len(poses), len(ANCHOR_FEATURES)))
     if ok.any():
         extra = {"closing": between[ok], "shift": shift[ok], "sources": np.asarray(sources)[ok],
-                 "grasp_depth": cfg.checks.grasp_depth_m}  # fmt: skip
+                 "grasp_depth": cfg.checks.grasp_depth_m, "handle_floor": handle_min_height(noise)}  # fmt: skip
         features[ok] = anchor_features(view, poses[ok], plane, object_tree, extra)
         scores[ok] = rank_scores(features[ok], critics, cfg)
     return _result(poses, scores, sources, between, list(reasons), counts, top_k, features)
@@ -281,11 +283,12 @@ def _result(poses, scores, sources, between, reasons, counts, top_k: int = 0, fe
 def anchor_features(view: ObjectView, poses: np.ndarray, plane, object_tree: cKDTree, extra: dict) -> np.ndarray:
     """(K, len(ANCHOR_FEATURES)) of checked camera-frame grasps: the critic's features read from the decoder at
     their object-frame poses, then the observation's cues (``grasp_critic.ANCHOR_FEATURES``). ``extra``: the
-    grasps' ``closing`` point counts, ``shift`` by the snap (m) and ``sources``."""
+    grasps' ``closing`` point counts, ``shift`` by the snap (m), ``sources``, the ``grasp_depth`` (m) and the face's
+    ``handle_floor`` (m, :func:`~.handles.handle_min_height`)."""
     rays = poses[:, :3, 3] / np.maximum(np.linalg.norm(poses[:, :3, 3], axis=1, keepdims=True), 1e-9)
     columns = [
         decoder_features(view, poses),
-        handle_cue(poses, plane, object_tree, extra["grasp_depth"])[:, None],
+        handle_cue(poses, plane, object_tree, extra["handle_floor"], extra["grasp_depth"])[:, None],
         leverage_cue(view, poses)[:, None],
         np.clip(np.einsum("ki,ki->k", poses[:, :3, 2], rays), 0.0, 1.0)[:, None],
         np.log1p(np.asarray(extra["closing"], float))[:, None],
@@ -327,14 +330,14 @@ def decoder_features(view: ObjectView, poses_camera: np.ndarray) -> np.ndarray:
     return grasp_features(view.decoder, view.code, view.joint, poses, offset, tcp_sdf, change, view.device)
 
 
-def handle_cue(poses: np.ndarray, plane, object_tree: cKDTree, grasp_depth: float = 0.02) -> np.ndarray:
+def handle_cue(poses: np.ndarray, plane, object_tree: cKDTree, floor: float, grasp_depth: float = 0.02) -> np.ndarray:
     """(K,) in [0, 1]: how far the material between each grasp's pads (:func:`~.observed_checks.points_between_pads`)
-    stands proud of the object's front plane, above the depth noise (0 at :func:`~.handles.handle_min_height` or
-    less, 1 from 1.5 cm above it up to the handle band's top; 0 without a plane)."""
+    stands proud of the object's front plane, above the depth noise (0 at ``floor``, the face's
+    :func:`~.handles.handle_min_height`, or less; 1 from 1.5 cm above it up to the handle band's top; 0 without a
+    plane)."""
     if plane is None:
         return np.zeros(len(poses))
     normal, offset = plane
-    floor = handle_min_height(object_tree.data, normal, offset)
     out = np.zeros(len(poses))
     for k, pose in enumerate(poses):
         between = points_between_pads(pose, object_tree, grasp_depth)
@@ -360,7 +363,8 @@ def leverage_cue(view: ObjectView, poses: np.ndarray) -> np.ndarray:
 
 
 #: Named anchoring settings, cumulative (each adds one lever to the one before): the ladder of the evaluation
-#: (``centerart eval scenes --grasps``) and of ``benchmarks/results/``. ``full`` is the predictor's default.
+#: (``centerart eval scenes --grasps``) and of ``benchmarks/results/``. The predictor's default is ``full``, and
+#: ``pose`` where a gravity direction is known (``PredictorConfig.pose_from_depth`` auto).
 LADDER = ("proposal", "checks", "snap", "square", "observed", "handle", "full", "pose")
 
 

@@ -66,9 +66,9 @@ def face_noise(points: np.ndarray, normal: np.ndarray, offset: float) -> float:
     return float(1.4826 * np.median(near)) if len(near) else 0.0
 
 
-def handle_min_height(points: np.ndarray, normal: np.ndarray, offset: float) -> float:
-    """How far (m) material must stand proud of this face to be a handle rather than depth noise: at least
-    HANDLE_MIN_HEIGHT_M, and NOISE_SIGMAS x :func:`face_noise`. Why: stereo depth scatters a flat door by 1-2 cm
-    (measured on rendered kitchens: median |error| 0.7-1.8 cm, 10th percentile 2-4 cm in front), which the fixed
-    1.5 cm band calls handles everywhere; real handles stand 3-6 cm proud."""
-    return max(HANDLE_MIN_HEIGHT_M, NOISE_SIGMAS * face_noise(points, normal, offset))
+def handle_min_height(noise_m: float) -> float:
+    """How far (m) material must stand proud of a face whose depth noise is ``noise_m`` (:func:`face_noise`) to be a
+    handle rather than depth noise: at least HANDLE_MIN_HEIGHT_M, and NOISE_SIGMAS x the noise. Why: stereo depth
+    scatters a flat door by 1-2 cm (measured on rendered kitchens: median |error| 0.7-1.8 cm, 10th percentile 2-4 cm
+    in front), which the fixed 1.5 cm band calls handles everywhere; real handles stand 3-6 cm proud."""
+    return max(HANDLE_MIN_HEIGHT_M, NOISE_SIGMAS * noise_m)

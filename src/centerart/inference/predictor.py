@@ -313,7 +313,7 @@ class Predictor:
             pose, info["icp"] = refine_pose_icp(recon.mesh, pose, observed, cfg.refine)
         correcting = cfg.pose_from_depth == "on" or (cfg.pose_from_depth == "auto" and self.gravity is not None)
         if correcting and observed is not None and len(recon.mesh.faces):
-            surface = recon.mesh.sample(4000, seed=0) if hasattr(recon.mesh, "sample") else recon.mesh.vertices
+            surface = recon.mesh.sample(4000, seed=0)
             pose, info["pose_from_depth"] = correct_pose(surface, pose, observed, self.gravity, cfg.pose_correction)
         t = self._tick("refine_s", t)
         # The axis moves with the refined pose (it was predicted relative to the object).
