@@ -119,6 +119,7 @@ def write_outputs(tmp: Path, predictor, preds, rgb, depth, camera, cfg: PredictC
         "encoder": {"path": str(enc), "sha256": file_sha256(enc)},
         "decoder": {"path": str(dec), "sha256": file_sha256(dec)},
         "grasp_critic": critic_record(dec) if cfg.predictor.grasp_critic else None,
+        "anchor_critic": critic_record(dec, "anchor_critic") if cfg.predictor.grasp_critic else None,
     }
     files = {
         "inputs": {"rgb": "rgb.png", "depth": "depth.npy", "points": "points.ply", **sources},

@@ -124,6 +124,7 @@ def test_resumed_run_equals_uninterrupted_and_the_report_is_complete(single_data
     assert report["held_out"] and report["scenes_evaluated"] == 2 and not report["scenes_missing"]
     critic = report["checkpoints"]["grasp_critic"]  # the shipped decoder's critic ranked the grasps: recorded
     assert critic["sha256"] == file_sha256(critic_path(default_checkpoint())) and critic["sha256"][:12] in md
+    assert report["checkpoints"]["anchor_critic"] is None  # none is shipped: the cue ranking ranked them
     methods = {k.split("|")[1] for k in report["groups"]}
     assert methods == {"centerart", "baseline", "oracle"}
     assert report["groups"][next(k for k in report["groups"] if "|oracle|" in k)]["sr"] >= 0.5

@@ -272,6 +272,7 @@ def check_same_settings(out: Path, jc: dict) -> None:
     settings = {k: jc[k] for k in RECORD_SETTINGS}
     settings["checkpoint_sha256"] = [file_sha256(Path(jc["encoder"])), file_sha256(Path(jc["decoder"]))]
     settings["grasp_critic"] = critic_record(Path(jc["decoder"]))  # it ranks the grasps: part of what is measured
+    settings["anchor_critic"] = critic_record(Path(jc["decoder"]), "anchor_critic")  # ranks anchored grasps too
     path = out / "settings.json"
     if path.is_file():
         before = json.loads(path.read_text())

@@ -88,7 +88,10 @@ def write_report(out: Path, job_cfg: dict, sets: dict[str, list[Path]], testset:
         "config": job_cfg,
         "code_version": code_version(),
         "checkpoints": {k: {"path": job_cfg[k], "sha256": file_sha256(Path(job_cfg[k]))} for k in CHECKPOINTS}
-        | {"grasp_critic": critic_record(Path(job_cfg["decoder"]))},
+        | {
+            "grasp_critic": critic_record(Path(job_cfg["decoder"])),
+            "anchor_critic": critic_record(Path(job_cfg["decoder"]), "anchor_critic"),
+        },
         "seed": job_cfg["seed"],
         "held_out": testset["held_out"],
         "training_overlap": testset["training_overlap"],
@@ -231,7 +234,11 @@ def _critic_words(report: dict) -> str:
     critic = report["checkpoints"].get("grasp_critic")
     if critic is None:
         return "no grasp critic (grasps ranked by the decoder's agreement confidence)"
-    return f"grasp critic {Path(critic['path']).name} (sha256 {critic['sha256'][:12]})"
+    words = f"grasp critic {Path(critic['path']).name} (sha256 {critic['sha256'][:12]})"
+    ranker = report["checkpoints"].get("anchor_critic")
+    if ranker is not None:
+        words += f", anchored-grasp ranker {Path(ranker['path']).name} (sha256 {ranker['sha256'][:12]})"
+    return words
 
 
 def sr_definition(th: dict) -> list[str]:
