@@ -28,6 +28,8 @@ from scipy.spatial import cKDTree
 
 from centerart.errors import CenterArtError
 from centerart.geometry.rotations import axis_angle_matrix
+from centerart.geometry.transforms import apply_transform
+from centerart.inference.refinement import icp_point_to_point
 
 
 @dataclass(frozen=True)
@@ -53,10 +55,6 @@ class PoseFromDepthConfig:
     def __post_init__(self):
         if self.max_correspondence_m <= 0 or self.max_shift_m <= 0 or self.rounds < 1 or self.iterations < 1:
             raise CenterArtError(f"PoseFromDepthConfig: thresholds and counts must be positive, got {self}")
-
-
-def _transform(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
-    return points @ pose[:3, :3].T + pose[:3, 3]
 
 
 def visible_points(points_camera: np.ndarray, radius_factor: float = 100.0) -> np.ndarray:
@@ -134,7 +132,7 @@ def _icp_yaw(src_obj: np.ndarray, pose: np.ndarray, tree: cKDTree, dst: np.ndarr
     full rotations only: there is no option to hold two rotational degrees of freedom fixed.
     Returns (pose, iterations run)."""
     for done in range(1, cfg.iterations + 1):
-        src = _transform(pose, src_obj)
+        src = apply_transform(pose, src_obj)
         dist, idx = tree.query(src, distance_upper_bound=cfg.max_correspondence_m)
         pair = np.isfinite(dist)
         if pair.sum() < 3:
@@ -147,27 +145,19 @@ def _icp_yaw(src_obj: np.ndarray, pose: np.ndarray, tree: cKDTree, dst: np.ndarr
 
 
 def _icp_6dof(src_obj: np.ndarray, pose: np.ndarray, dst: np.ndarray, cfg) -> np.ndarray:
-    import open3d as o3d
-
-    reg = o3d.pipelines.registration
-    result = reg.registration_icp(
-        o3d.geometry.PointCloud(o3d.utility.Vector3dVector(src_obj)),
-        o3d.geometry.PointCloud(o3d.utility.Vector3dVector(dst)),
-        cfg.max_correspondence_m, pose, reg.TransformationEstimationPointToPoint(),
-        reg.ICPConvergenceCriteria(max_iteration=cfg.iterations),
-    )  # fmt: skip
+    result = icp_point_to_point(src_obj, dst, pose, cfg.max_correspondence_m, cfg.iterations)
     return np.asarray(result.transformation)
 
 
 def _seen(surface_obj: np.ndarray, pose: np.ndarray, cfg: PoseFromDepthConfig) -> np.ndarray:
-    mask = visible_points(_transform(pose, surface_obj), cfg.hpr_radius_factor)
+    mask = visible_points(apply_transform(pose, surface_obj), cfg.hpr_radius_factor)
     return surface_obj[mask]
 
 
 def _fit(src_obj: np.ndarray, pose: np.ndarray, tree: cKDTree, max_m: float) -> tuple[float, float]:
     """(fitness, inlier rmse in m) as open3d defines them: the fraction of source points with a target within
     ``max_m``, and the rms distance of those."""
-    dist = tree.query(_transform(pose, src_obj), distance_upper_bound=max_m)[0]
+    dist = tree.query(apply_transform(pose, src_obj), distance_upper_bound=max_m)[0]
     ok = np.isfinite(dist)
     return float(ok.mean()) if len(ok) else 0.0, float(np.sqrt(np.mean(dist[ok] ** 2))) if ok.any() else np.inf
 
@@ -226,7 +216,7 @@ def correct_pose(
     g = None if gravity_camera is None else np.asarray(gravity_camera, float) / np.linalg.norm(gravity_camera)
     pose = upright(pose_in, g) if g is not None else pose_in.copy()
     if cfg.centroid_init:  # the published initialisation: the seen surface's centroid onto the observed one
-        pose[:3, 3] += observed.mean(0) - _transform(pose, _seen(surface, pose, cfg)).mean(0)
+        pose[:3, 3] += observed.mean(0) - apply_transform(pose, _seen(surface, pose, cfg)).mean(0)
     tree = cKDTree(observed)
     for _ in range(cfg.rounds):
         seen = _seen(surface, pose, cfg)

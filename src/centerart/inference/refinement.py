@@ -46,10 +46,23 @@ def visible_surface_points(mesh, camera_T_object: np.ndarray, count: int, seed: 
     return pts[facing][:count]
 
 
-def refine_pose_icp(mesh, camera_T_object: np.ndarray, observed: np.ndarray, cfg: RefineConfig):
-    """Refined ``camera_T_object`` and a dict (accepted, fitness, rmse, shift_m)."""
+def icp_point_to_point(src: np.ndarray, dst: np.ndarray, init: np.ndarray, max_correspondence_m: float,
+                       iterations: int):  # fmt: skip
+    """open3d's point-to-point ICP of ``src`` (N, 3, the pose's source frame) onto ``dst`` (M, 3) from ``init``
+    (4x4); its result (``transformation``, ``fitness``, ``inlier_rmse``)."""
     import open3d as o3d
 
+    reg = o3d.pipelines.registration
+    return reg.registration_icp(
+        o3d.geometry.PointCloud(o3d.utility.Vector3dVector(src)),
+        o3d.geometry.PointCloud(o3d.utility.Vector3dVector(dst)),
+        max_correspondence_m, init, reg.TransformationEstimationPointToPoint(),
+        reg.ICPConvergenceCriteria(max_iteration=iterations),
+    )  # fmt: skip
+
+
+def refine_pose_icp(mesh, camera_T_object: np.ndarray, observed: np.ndarray, cfg: RefineConfig):
+    """Refined ``camera_T_object`` and a dict (accepted, fitness, rmse, shift_m)."""
     if len(observed) < 50 or len(mesh.faces) == 0:
         return camera_T_object, {"accepted": False, "reason": "too few observed points or empty mesh"}
     src = visible_surface_points(mesh, camera_T_object, cfg.surface_points)
@@ -57,13 +70,7 @@ def refine_pose_icp(mesh, camera_T_object: np.ndarray, observed: np.ndarray, cfg
     init = camera_T_object.copy()
     if cfg.centroid_init:  # the published initialisation: move the seen surface's centroid onto the observed one
         init[:3, 3] += observed.mean(0) - (src @ camera_T_object[:3, :3].T + camera_T_object[:3, 3]).mean(0)
-    src_pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(src))
-    dst_pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(observed))
-    result = o3d.pipelines.registration.registration_icp(
-        src_pc, dst_pc, cfg.icp_max_correspondence_m, init,
-        o3d.pipelines.registration.TransformationEstimationPointToPoint(),
-        o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=cfg.icp_iterations),
-    )  # fmt: skip
+    result = icp_point_to_point(src, observed, init, cfg.icp_max_correspondence_m, cfg.icp_iterations)
     pose = np.asarray(result.transformation)
     shift = float(np.linalg.norm(pose[:3, 3] - camera_T_object[:3, 3]))
     info = {"fitness": float(result.fitness), "rmse": float(result.inlier_rmse), "shift_m": shift}
