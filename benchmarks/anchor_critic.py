@@ -36,6 +36,7 @@ def collect_scene(scene_dir: Path, predictor, depth_modes) -> list[dict]:
     from centerart.evaluation.scene_rows import associate_by_image
     from centerart.evaluation.trials import execute_grasp
     from centerart.scenes.description import SceneDescription, load_scene_object
+    from centerart.training.encoder_metrics import MIN_VISIBLE_FRACTION
 
     scene = SceneDescription.load(scene_dir / "scene.json")
     phys = build_physics_scene(scene, [load_scene_object(s) for s in scene.objects])
@@ -45,7 +46,7 @@ def collect_scene(scene_dir: Path, predictor, depth_modes) -> list[dict]:
             preds = predictor.predict(v.rgb, v.depth, v.K)
             for j, i in associate_by_image(v, preds).items():
                 obj, pred = v.labels["objects"][j], preds[i]
-                if pred.grasp_features is None or obj["visible_fraction"] < 0.3:
+                if pred.grasp_features is None or obj["visible_fraction"] < MIN_VISIBLE_FRACTION:
                     continue
                 world = v.world_T_camera @ pred.grasp_poses
                 ok = [bool(execute_grasp(phys, obj["instance"] - 1, w)["success"]) for w in world]

@@ -33,6 +33,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from centerart.geometry.planes import ransac_plane
+from centerart.geometry.transforms import apply_transform
 from centerart.inference.decoder_grasps import (
     GraspExtractionConfig,
     grasp_features,
@@ -146,7 +147,7 @@ def observed_field_candidates(view: ObjectView, cfg: AnchoringConfig) -> np.ndar
     rays = pts / np.maximum(np.linalg.norm(pts, axis=1, keepdims=True), 1e-9)
     queries = np.concatenate([pts - s * rays for s in cfg.ray_steps_m])
     object_T_camera = np.linalg.inv(view.camera_T_object)
-    q = queries @ object_T_camera[:3, :3].T + object_T_camera[:3, 3]
+    q = apply_transform(object_T_camera, queries)
     sdf, raw = decoder_field(view.decoder, view.code, view.joint, device=view.device)(q.astype(np.float32))
     out = decode_outputs(raw)
     offset, rot = out.offset.numpy().astype(float), out.rotation.numpy().astype(float)
