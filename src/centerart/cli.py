@@ -133,6 +133,23 @@ COMMANDS: dict[str, dict[str, Command]] = {
             default="centerart.recipe.config:cli_default",
         )
     },
+    "slices": {
+        "next": Command(
+            "centerart.recipe.slices:SlicesNextConfig",
+            "centerart.commands:slices_next",
+            "train the encoder one slice further (new scenes, same run, one ledger line); resumable",
+        ),
+        "status": Command(
+            "centerart.recipe.slices:SlicesStatusConfig",
+            "centerart.commands:slices_status",
+            "a sliced run's plan and ledger (validation figures per slice)",
+        ),
+        "replay": Command(
+            "centerart.recipe.slices:SlicesReplayConfig",
+            "centerart.commands:slices_replay",
+            "remake a sliced run's state from its ledger and check it equals the committed one",
+        ),
+    },
     "view": {
         "": Command(
             "centerart.viz.viewer:ViewConfig",

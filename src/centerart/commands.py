@@ -185,3 +185,35 @@ def view(cfg) -> None:
     server = serve_viewer(cfg, block=False)
     print(f"3-D viewer of {cfg.path}: open {viewer_url(server)} in a web browser (Ctrl+C to stop)", flush=True)
     block_until_interrupted(server)
+
+
+def slices_next(cfg) -> None:
+    from centerart.recipe.slices import commit_run, next_slice
+
+    line = next_slice(cfg)
+    if "stopped" in line:
+        return
+    v = line["validation"]
+    figures = ", ".join(f"{k} {v[k]:.3f}" for k in ("recall", "precision", "translation_m", "rotation_deg") if k in v)
+    print(f"slice {line['slice']} done: {line['steps']} steps, {line['images']} new images; validation: {figures}")
+    if cfg.commit:
+        print(commit_run(cfg.run, line))
+    else:
+        print(f"wrote {cfg.run}/ledger.jsonl, state.pt, encoder.pt; commit them (git add {cfg.run}) to keep them")
+
+
+def slices_status(cfg) -> None:
+    from centerart.recipe.slices import status_table
+
+    print(status_table(cfg.run), end="")
+
+
+def slices_replay(cfg) -> None:
+    from centerart.recipe.slices import replay
+
+    r = replay(cfg)
+    diff = f"{r['max_abs_weight_diff']:.3g} <= {r['tolerance']:g}"
+    print(
+        f"replayed {r['slices']} slices ({r['steps']} steps): largest weight difference {diff}; the ledger "
+        f"reproduces {cfg.run}/state.pt"
+    )

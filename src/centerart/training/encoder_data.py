@@ -98,12 +98,16 @@ class EncoderViewDataset(Dataset):
         self.epoch = epoch
 
     def __getitem__(self, index: int) -> dict:
+        return self.item(index, self.epoch)
+
+    def item(self, index: int, epoch: int) -> dict:
+        """View ``index`` as drawn in ``epoch`` (its augmentation is seeded by (seed, epoch, index))."""
         view = load_view_for_encoder(self.views[index])
         labels = view.labels
         camera = Intrinsics.from_matrix(labels["K"], labels["width"], labels["height"])
         cfg = self.config
         if self.augment is not None:
-            rng = np.random.default_rng([self.seed, self.epoch, index])
+            rng = np.random.default_rng([self.seed, epoch, index])
             depth, kind = choose_depth(view.depth_true, view.depth_realistic, camera.K, self.augment, rng)
             box = random_letterbox(camera.width, camera.height, cfg.input_width, cfg.input_height, self.augment, rng)
         else:
@@ -122,7 +126,11 @@ class EncoderViewDataset(Dataset):
 
 
 def collate(items: list[dict]) -> dict:
-    """Stack tensors; keep the per-item ``meta`` dicts as a list."""
+    """Stack tensors; keep the per-item ``meta`` dicts as a list. Images come in channels-last memory order: the
+    layout oneDNN's CPU convolutions run fastest in (1.3x the training images/s on 2 cores with the model in the
+    same order: ``benchmarks/encoder_train_speed.py``)."""
     out = {k: torch.stack([it[k] for it in items]) for k in items[0] if k != "meta"}
+    for key in ("rgb", "depth"):
+        out[key] = out[key].contiguous(memory_format=torch.channels_last)
     out["meta"] = [it["meta"] for it in items]
     return out

@@ -1,0 +1,91 @@
+"""The ledger of a sliced training run: ``RUN/ledger.jsonl``, one JSON line per finished slice.
+
+A line holds everything that made the slice (its scene seeds and counts, steps, batch size, learning-rate scale,
+code version) and what it measured (validation figures, wall times), plus the SHA-256 of the state and encoder
+files it wrote. Replaying the lines from the run's plan remakes the files (:func:`centerart.recipe.slices.replay`).
+The run folder is consistent when the ledger's last line names the state file that is there; anything else (a
+damaged line, a state written by another slice, a state without a ledger) is one clear error.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from centerart.errors import CenterArtError
+from centerart.models.checkpoint_files import file_sha256
+from centerart.utils.atomic import atomic_write_bytes
+
+LEDGER = "ledger.jsonl"
+STATE = "state.pt"
+#: Fields every ledger line has, with their types.
+LINE_FIELDS = {
+    "slice": int,
+    "seeds": dict,
+    "data": dict,
+    "steps": int,
+    "first_step": int,
+    "batch_size": int,
+    "lr_scale": float,
+    "images": int,
+    "state_sha256": str,
+    "validation": dict,
+    "code_version": str,
+}
+
+
+def read_ledger(run: Path) -> list[dict]:
+    """The ledger's lines in order (empty when the run has none yet); a damaged line is one error naming it."""
+    path = Path(run) / LEDGER
+    if not path.is_file():
+        return []
+    lines = []
+    for number, text in enumerate(path.read_text().splitlines(), 1):
+        if not text.strip():
+            continue
+        try:
+            line = json.loads(text)
+        except json.JSONDecodeError as err:
+            raise CenterArtError(f"{path}: line {number} is not JSON ({err.msg})") from None
+        _check_line(line, path, number, expected_slice=len(lines) + 1)
+        lines.append(line)
+    return lines
+
+
+def _check_line(line, path: Path, number: int, expected_slice: int) -> None:
+    if not isinstance(line, dict):
+        raise CenterArtError(f"{path}: line {number} is not a ledger record")
+    for name, kind in LINE_FIELDS.items():
+        value = line.get(name)
+        ok = isinstance(value, kind) or (kind is float and isinstance(value, int) and not isinstance(value, bool))
+        if not ok:
+            raise CenterArtError(f"{path}: line {number} lacks {name!r} ({kind.__name__})")
+    if line["slice"] != expected_slice:
+        raise CenterArtError(f"{path}: line {number} records slice {line['slice']}, expected {expected_slice}")
+
+
+def check_run_files(run: Path, lines: list[dict]) -> Path | None:
+    """``RUN/state.pt`` when it is the state the ledger's last line wrote (None for a run with no slice yet).
+
+    Raises:
+        CenterArtError: a state without a ledger, a ledger without its state, or a state another slice wrote.
+    """
+    state = Path(run) / STATE
+    if not lines:
+        if state.exists():
+            raise CenterArtError(f"{state}: a training state without ledger lines; restore {LEDGER} or remove it")
+        return None
+    if not state.is_file():
+        raise CenterArtError(f"{state}: missing, but {LEDGER} records {len(lines)} slices; restore it (git)")
+    if file_sha256(state) != lines[-1]["state_sha256"]:
+        raise CenterArtError(
+            f"{state}: not the state slice {lines[-1]['slice']} of {LEDGER} wrote (SHA-256 differs); "
+            "restore the pair from git"
+        )
+    return state
+
+
+def append_line(run: Path, lines: list[dict], line: dict) -> None:
+    """Write the ledger with ``line`` appended, atomically (a crash leaves the old ledger)."""
+    text = "".join(json.dumps(x, sort_keys=True) + "\n" for x in [*lines, line])
+    atomic_write_bytes(Path(run) / LEDGER, text.encode())

@@ -1,0 +1,490 @@
+"""``centerart slices``: train the encoder across working periods, one slice at a time, with a ledger.
+
+A run folder (``RUN``, committed to git) holds::
+
+    RUN/run.json       the plan every slice shares (:class:`~centerart.recipe.slice_plan.SlicePlan`)
+    RUN/ledger.jsonl   one line per finished slice (:mod:`centerart.recipe.ledger`)
+    RUN/state.pt       weights, Adam moments and step after the last slice (:mod:`centerart.training.slice_training`)
+    RUN/encoder.pt     the same weights as an encoder checkpoint (``centerart predict --encoder RUN/encoder.pt``)
+
+A work folder (``WORK``, never committed: regenerated from seeds) holds the objects, the validation scenes and
+each slice's scenes and progress. ``centerart slices next`` makes slice k = lines + 1: it renders the slice's
+scenes (seeds from :func:`~centerart.recipe.slice_plan.slice_seeds`), continues ``RUN/state.pt`` for the slice's
+steps (saving progress in ``WORK/slice_k/progress.pt`` every few minutes: an interrupted slice resumes), validates
+on the fixed set, then writes the state, the encoder and the ledger line, in that order (a crash between them is
+finished by the next call from ``WORK/slice_k/line.json``), and with ``--commit`` commits the run folder.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+from centerart.errors import CenterArtError
+from centerart.recipe.ledger import STATE, append_line, check_run_files, read_ledger
+from centerart.recipe.slice_plan import SliceData, SlicePlan, plan_preset, slice_seeds
+from centerart.utils.checks import at_least, positive
+
+SAVE_EVERY_S = 300.0  # progress saved this often (and when a slice stops early)
+
+
+@dataclass
+class SlicesNextConfig:
+    """Run the next slice of a sliced encoder training run (creates the run on first use)."""
+
+    run: Path
+    """Run folder (committed): run.json, ledger.jsonl, state.pt, encoder.pt."""
+    work: Path = Path("runs/slices-work")
+    """Work folder for data and progress (not committed; regenerated from seeds)."""
+    preset: Literal["tiny", "small"] = "small"
+    """Plan of a new run (ignored once RUN/run.json exists)."""
+    init: Path | None = None
+    """A new run starts from this encoder checkpoint instead of random weights (ignored once the run exists)."""
+    steps: int | None = None
+    """Optimizer steps of this slice (default: the plan's)."""
+    kitchen: int | None = None
+    """Kitchen scenes of this slice (default: the plan's)."""
+    single: int | None = None
+    """Single-object scenes of this slice (default: the plan's)."""
+    lr_scale: float = 1.0
+    """This slice's learning rate as a multiple of the plan's (lower it for the last slices of a run)."""
+    stop_after: int | None = None
+    """Stop after this many steps of the slice (progress is kept; rerun to resume)."""
+    max_minutes: float = 0.0
+    """Stop training after this much time in this call (0: no limit); rerun to resume."""
+    workers: int | None = None
+    """Scene rendering processes (default: all cores)."""
+    loader_workers: int = 1
+    threads: int = 0
+    """torch CPU threads (0: torch default)."""
+    commit: bool = False
+    """git commit the run folder after the slice (the ledger line and the files it names)."""
+    progress: bool = True
+
+    def __post_init__(self):
+        for name in ("steps", "kitchen", "single", "stop_after"):
+            if getattr(self, name) is not None:
+                at_least(f"--{name.replace('_', '-')}", getattr(self, name), 0 if name != "steps" else 1)
+        positive("--lr-scale", self.lr_scale)
+        for name in ("max_minutes", "loader_workers", "threads"):
+            at_least(f"--{name.replace('_', '-')}", getattr(self, name), 0)
+
+
+@dataclass
+class SlicesStatusConfig:
+    """Print a sliced run's plan and ledger."""
+
+    run: Path
+
+
+@dataclass
+class SlicesReplayConfig:
+    """Replay a run's ledger from its plan into WORK and compare the weights with RUN/state.pt."""
+
+    run: Path
+    work: Path = Path("runs/slices-replay")
+    workers: int | None = None
+    threads: int = 0
+    tolerance: float = 1e-4
+    """Largest absolute weight difference accepted (float reordering across machines)."""
+    progress: bool = True
+
+
+# ---------------------------------------------------------------------------- the run's plan and decoder
+def load_plan(run: Path) -> SlicePlan | None:
+    import json
+
+    path = Path(run) / "run.json"
+    if not path.is_file():
+        return None
+    try:
+        return SlicePlan.from_dict(json.loads(path.read_text()))
+    except (json.JSONDecodeError, AttributeError) as err:
+        raise CenterArtError(f"{path}: damaged run plan ({err})") from None
+
+
+def create_plan(run: Path, preset: str, init: Path | None) -> SlicePlan:
+    """A new run's plan from ``preset``, its decoder pinned by SHA-256, written to ``RUN/run.json``."""
+    from centerart.models.checkpoint_files import file_sha256
+    from centerart.utils.atomic import atomic_write_json
+
+    plan = plan_preset(preset)
+    decoder = _repo_path(plan.decoder)
+    if not decoder.is_file():
+        raise CenterArtError(f"{decoder}: the plan's decoder checkpoint is missing")
+    plan.decoder_sha256 = file_sha256(decoder)
+    if init is not None:
+        if not Path(init).is_file():
+            raise CenterArtError(f"--init {init}: no such encoder checkpoint")
+        plan.init = str(Path(init).resolve())
+    atomic_write_json(Path(run) / "run.json", plan.to_dict())
+    return plan
+
+
+def _repo_path(path: str) -> Path:
+    """A plan path: absolute, or relative to the source tree's root (where the shipped weights live)."""
+    p = Path(path)
+    return p if p.is_absolute() else Path(__file__).resolve().parents[3] / p
+
+
+def checked_decoder(plan: SlicePlan) -> Path:
+    from centerart.models.checkpoint_files import file_sha256
+
+    path = _repo_path(plan.decoder)
+    if not path.is_file() or file_sha256(path) != plan.decoder_sha256:
+        raise CenterArtError(f"{path}: not the decoder this run trains against (missing or SHA-256 differs)")
+    return path
+
+
+# ---------------------------------------------------------------------------- data
+def prepare_objects(plan: SlicePlan, work: Path, decoder: Path, workers: int | None) -> dict[str, Path]:
+    """Generate the plan's objects in ``WORK/objects`` and link the decoder's training and held-out objects into
+    ``WORK/split/{train,heldout}``, after checking each training object's content fingerprint."""
+    import torch
+
+    from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
+    from centerart.assets.fingerprint import fingerprint_folders
+
+    objects = work / "objects"
+    generate_objects(GenerateObjectsConfig(
+        out=objects, category="all", count=plan.objects_count, seed=plan.objects_seed, variety=plan.variety,
+        workers=workers,
+    ))  # fmt: skip
+    blob = torch.load(decoder, map_location="cpu", weights_only=True)
+    recorded, heldout = dict(blob.get("training_objects") or {}), list(blob["split"]["heldout_objects"])
+    here = fingerprint_folders({oid: objects / oid for oid in recorded})
+    differ = sorted(oid for oid, fp in recorded.items() if fp is None or here[oid] != fp)
+    if not recorded or differ:
+        raise CenterArtError(
+            f"{decoder}: its training objects are not the plan's objects (seed {plan.objects_seed}, "
+            f"{plan.objects_count} per category): {', '.join(differ[:4]) or 'none recorded'}"
+        )
+    folders = {}
+    for role, ids in (("train", sorted(recorded)), ("heldout", heldout)):
+        folders[role] = work / "split" / role
+        folders[role].mkdir(parents=True, exist_ok=True)
+        for oid in ids:
+            link = folders[role] / oid
+            if not link.is_symlink():
+                link.symlink_to(Path("..") / ".." / "objects" / oid, target_is_directory=True)
+    return folders
+
+
+def render(objects: Path, out: Path, layout: str, count: int, views: int, seed: int, data, decoder, workers):
+    """``centerart scenes generate`` of one set (resumable: finished scenes are kept); returns its view folders."""
+    from centerart.scenes.dataset import GenerateScenesConfig, generate_scenes
+    from centerart.training.encoder_data import checked_views
+
+    if count == 0:
+        return []
+    generate_scenes(GenerateScenesConfig(
+        objects=objects, out=out, layout=layout, count=count, views_per_scene=views, seed=seed, depth=data.depth,
+        intrinsics=data.intrinsics, ir_shading=getattr(data, "ir_shading", "fast"), save_ir=False,
+        decoder_checkpoint=decoder, workers=workers,
+    ))  # fmt: skip
+    return checked_views([out])
+
+
+def slice_views(folders, work_slice: Path, data: SliceData, seeds: dict, decoder: Path, workers) -> list[Path]:
+    kitchen = render(folders["train"], work_slice / "kitchen", "kitchen", data.kitchen, data.kitchen_views,
+                     seeds["kitchen"], data, decoder, workers)  # fmt: skip
+    single = render(folders["train"], work_slice / "single", "single", data.single, data.single_views,
+                    seeds["single"], data, decoder, workers)  # fmt: skip
+    return kitchen + single
+
+
+def validation_views(plan: SlicePlan, folders, work: Path, workers) -> list[Path]:
+    v = plan.validation
+    kitchen = render(folders["heldout"], work / "val" / "kitchen", "kitchen", v.kitchen, v.kitchen_views,
+                     v.kitchen_seed, v, None, workers)  # fmt: skip
+    single = render(folders["heldout"], work / "val" / "single", "single", v.single, 1, v.single_seed, v, None, workers)
+    return kitchen + single
+
+
+# ---------------------------------------------------------------------------- one slice
+def slice_settings(plan: SlicePlan, cfg: SlicesNextConfig, index: int, saved: dict | None) -> dict:
+    """What slice ``index`` renders and trains (the plan's defaults with this call's overrides); a resumed slice
+    keeps the settings it started with and refuses different ones."""
+    data = SliceData(**{**plan.data.__dict__})
+    data.kitchen = data.kitchen if cfg.kitchen is None else cfg.kitchen
+    data.single = data.single if cfg.single is None else cfg.single
+    settings = {
+        "slice": index,
+        "seeds": slice_seeds(index),
+        "data": dict(data.__dict__),
+        "steps": plan.steps if cfg.steps is None else cfg.steps,
+        "batch_size": plan.batch_size,
+        "lr_scale": float(cfg.lr_scale),
+    }
+    if saved is None:
+        return settings
+    given = {"steps": cfg.steps, "kitchen": cfg.kitchen, "single": cfg.single}
+    now = {"steps": saved["steps"], "kitchen": saved["data"]["kitchen"], "single": saved["data"]["single"]}
+    differ = [k for k, v in given.items() if v is not None and v != now[k]]
+    if cfg.lr_scale != saved["lr_scale"]:
+        differ.append("lr_scale")
+    if differ:
+        raise CenterArtError(f"slice {index} started with other settings ({', '.join(differ)}); rerun without them")
+    return saved
+
+
+def encoder_config(plan: SlicePlan, codes: dict):
+    from centerart.models.encoder.config import preset
+
+    return preset(plan.encoder_preset, code_dim=len(next(iter(codes.values()))))
+
+
+def start_state(plan: SlicePlan, run: Path, lines: list[dict], work_slice: Path, config):
+    """The state slice k starts (or resumes) from, and the slice step it is at."""
+    from centerart.training.slice_training import load_state, new_state
+
+    start_sha = lines[-1]["state_sha256"] if lines else "init"
+    progress = work_slice / "progress.pt"
+    if progress.is_file():
+        state = load_state(progress, config)
+        if state.meta.get("start_sha") == start_sha:
+            return state, int(state.meta["slice_step"])
+    if lines:
+        state = load_state(run / STATE, config)
+    else:
+        state = new_state(config, plan.seed, Path(plan.init) if plan.init else None)
+    state.meta = {"start_sha": start_sha, "slice_step": 0}
+    return state, 0
+
+
+def train_on(state, views, codes, plan: SlicePlan, settings: dict, start: int, options: dict):
+    """Continue ``state`` over slice ``settings`` from slice step ``start``; returns the slice step reached.
+
+    ``options``: ``workers`` (loader processes), ``max_seconds``, ``stop_after``, ``save`` (a callable taking the
+    state, run every SAVE_EVERY_S seconds and at the end), ``progress``."""
+    from tqdm import tqdm
+
+    from centerart.models.encoder.losses import EncoderLossConfig
+    from centerart.training.encoder_data import EncoderViewDataset
+    from centerart.training.slice_training import SliceSchedule, StepLoop, run_steps, slice_batches
+
+    k, steps = settings["slice"], settings["steps"]
+    stop = min(steps, options.get("stop_after") or steps)
+    batches = slice_batches(len(views), settings["batch_size"], steps, plan.seed, k)[:stop]
+    dataset = EncoderViewDataset(
+        views, state.encoder.config, codes, plan.augment_config(), seed=plan.seed * 100_000 + k
+    )
+    schedule = SliceSchedule(plan.lr, plan.warmup_steps, settings["lr_scale"])
+    loop = StepLoop(batches, schedule, EncoderLossConfig(**plan.loss), options.get("workers", 1),
+                    options.get("max_seconds", 0.0))  # fmt: skip
+    bar = tqdm(total=steps, initial=start, desc=f"slice {k}", disable=not options.get("progress", True))
+    last_save = [time.perf_counter()]
+
+    def on_step(done: int, terms: dict) -> None:
+        state.meta["slice_step"] = done
+        bar.update(1)
+        bar.set_postfix(loss=f"{terms['loss']:.3f}", refresh=False)
+        if options.get("save") and time.perf_counter() - last_save[0] > SAVE_EVERY_S:
+            options["save"](state)
+            last_save[0] = time.perf_counter()
+
+    reached = run_steps(state, dataset, loop, start, on_step) if start < stop else start
+    bar.close()
+    if options.get("save"):
+        options["save"](state)
+    return reached
+
+
+def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
+    """Run (or resume, or finish writing) the next slice of ``cfg.run``; returns its ledger line, or a status
+    dict ``{"stopped": step, "of": steps}`` when the slice stopped early."""
+    import json
+
+    import torch
+
+    from centerart.models.checkpoint import load_shape_codes
+    from centerart.utils.atomic import atomic_write_json
+
+    run, work = Path(cfg.run), Path(cfg.work)
+    run.mkdir(parents=True, exist_ok=True)
+    plan = load_plan(run) or create_plan(run, cfg.preset, cfg.init)
+    lines = read_ledger(run)
+    k = len(lines) + 1
+    work_slice = work / f"slice_{k:03d}"
+    if (work_slice / "line.json").is_file() and _finish_pending(run, lines, work_slice):
+        echo(f"slice {k}: its files were written by an interrupted call; ledger line added")
+        return read_ledger(run)[-1]
+    check_run_files(run, lines)
+    decoder = checked_decoder(plan)
+    if cfg.threads > 0:
+        torch.set_num_threads(cfg.threads)
+    codes = load_shape_codes(decoder)
+    config = encoder_config(plan, codes)
+    state, start = start_state(plan, run, lines, work_slice, config)  # a state of another layout stops here
+    saved = work_slice / "settings.json"
+    settings = slice_settings(plan, cfg, k, json.loads(saved.read_text()) if saved.is_file() else None)
+    atomic_write_json(saved, settings)
+    t0 = time.perf_counter()
+    folders = prepare_objects(plan, work, decoder, cfg.workers)
+    val = validation_views(plan, folders, work, cfg.workers)
+    views = slice_views(folders, work_slice, SliceData(**settings["data"]), settings["seeds"], decoder, cfg.workers)
+    data_s = time.perf_counter() - t0
+    options = {"workers": cfg.loader_workers, "max_seconds": cfg.max_minutes * 60, "stop_after": cfg.stop_after,
+               "save": lambda s: _save_progress(s, work_slice), "progress": cfg.progress}  # fmt: skip
+    t1 = time.perf_counter()
+    reached = train_on(state, views, codes, plan, settings, start, options)
+    train_s = time.perf_counter() - t1
+    if reached < settings["steps"]:
+        echo(f"slice {k}: stopped at step {reached} of {settings['steps']}; rerun the same command to resume")
+        return {"stopped": reached, "of": settings["steps"]}
+    return _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder, val,
+                         {"data": data_s, "train": train_s}, len(views))  # fmt: skip
+
+
+def _save_progress(state, work_slice: Path) -> None:
+    from centerart.training.slice_training import save_state
+
+    save_state(work_slice / "progress.pt", state)
+
+
+def _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder, val, wall, images) -> dict:
+    """Validate, then write state, encoder and ledger line (the line goes to ``WORK/slice_k/line.json`` first)."""
+    from centerart.models.checkpoint_files import file_sha256
+    from centerart.training.encoder_data import EncoderViewDataset
+    from centerart.training.slice_training import save_state, validate
+    from centerart.utils.atomic import atomic_write_json
+    from centerart.utils.manifest import code_version
+
+    t0 = time.perf_counter()
+    val_ds = EncoderViewDataset(val, state.encoder.config, codes, None) if val else None
+    figures = validate(state.encoder, val_ds, codes) if val_ds is not None else {}
+    wall["validation"] = time.perf_counter() - t0
+    state.meta = {"slices": settings["slice"]}
+    staged = save_state(work_slice / STATE, state)
+    distinct = images + sum(line["images"] for line in lines)
+    line = {**settings, "first_step": state.step - settings["steps"], "images": images,
+            "distinct_images": distinct, "images_seen": state.step * settings["batch_size"],
+            "validation": {k: round(v, 5) for k, v in figures.items()},
+            "wall_s": {k: round(v, 1) for k, v in wall.items()},
+            "state_sha256": file_sha256(staged), "code_version": code_version(), "threads": _threads(),
+            "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}  # fmt: skip
+    _export_encoder(work_slice / "encoder.pt", state, plan, decoder, codes, line)
+    line["encoder_sha256"] = file_sha256(work_slice / "encoder.pt")
+    atomic_write_json(work_slice / "line.json", line)
+    _finish_pending(run, lines, work_slice)
+    return line
+
+
+def _threads() -> int:
+    import torch
+
+    return int(torch.get_num_threads())
+
+
+def _export_encoder(path: Path, state, plan: SlicePlan, decoder: Path, codes: dict, line: dict) -> None:
+    import torch
+
+    from centerart.models.encoder.checkpoint import save_encoder
+
+    recorded = torch.load(decoder, map_location="cpu", weights_only=True)["training_objects"]
+    train_config = {"sliced_run": plan.to_dict(), "slice": {k: v for k, v in line.items() if k != "validation"}}
+    metrics = {f"val/{k}": v for k, v in line["validation"].items()}
+    encoder = state.encoder.to(memory_format=torch.contiguous_format)
+    save_encoder(path, encoder, decoder, sorted(codes), train_config, metrics, dict(recorded))
+
+
+def _finish_pending(run: Path, lines: list[dict], work_slice: Path) -> bool:
+    """Copy a finished slice's files from WORK into RUN, then append its line (last: the line is the commit
+    point). False when the staged files are not the next slice's (then nothing is touched)."""
+    import json
+    import shutil
+
+    from centerart.models.checkpoint_files import file_sha256
+
+    line = json.loads((work_slice / "line.json").read_text())
+    staged = {STATE: work_slice / STATE, "encoder.pt": work_slice / "encoder.pt"}
+    if line.get("slice") != len(lines) + 1 or file_sha256(staged[STATE]) != line["state_sha256"]:
+        return False
+    for name, path in staged.items():
+        tmp = run / f".{name}.tmp{os.getpid()}"
+        shutil.copyfile(path, tmp)
+        os.replace(tmp, run / name)
+    append_line(run, lines, line)
+    return True
+
+
+def commit_run(run: Path, line: dict) -> str:
+    """``git commit`` of the run folder with a message naming the slice; returns git's one-line summary."""
+    run = Path(run).resolve()
+    message = (f"slices: {run.name} slice {line['slice']} ({line['steps']} steps, {line['images']} new images; "
+               f"val recall {line['validation'].get('recall', float('nan')):.3f})")  # fmt: skip
+    try:
+        subprocess.run(["git", "-C", str(run), "add", "--", "."], check=True, capture_output=True, text=True)
+        done = subprocess.run(["git", "-C", str(run), "commit", "-m", message, "--", "."], check=True,
+                              capture_output=True, text=True)  # fmt: skip
+    except (OSError, subprocess.CalledProcessError) as err:
+        detail = (getattr(err, "stderr", "") or str(err)).strip().splitlines()
+        raise CenterArtError(f"--commit: git commit of {run} failed ({detail[-1] if detail else err})") from None
+    return done.stdout.strip().splitlines()[0]
+
+
+# ---------------------------------------------------------------------------- status, replay
+STATUS_COLUMNS = ("recall", "precision", "translation_m", "rotation_deg")
+
+
+def status_table(run: Path) -> str:
+    """The plan in one line and one row per ledger line (markdown)."""
+    plan = load_plan(run)
+    if plan is None:
+        raise CenterArtError(f"{run}: no run.json (not a sliced run; `centerart slices next --run {run}` makes one)")
+    lines = read_ledger(run)
+    check_run_files(run, lines)
+    head = (f"{run}: preset {plan.preset}, encoder {plan.encoder_preset}, batch {plan.batch_size}, lr {plan.lr}, "
+            f"decoder {plan.decoder} ({plan.decoder_sha256[:12]})\n\n")  # fmt: skip
+    cols = ("slice", "steps", "total steps", "new images", "distinct images", "hours", *STATUS_COLUMNS)
+    rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    for x in lines:
+        v = x["validation"]
+        figures = [f"{v[c]:.3f}" if c in v else "-" for c in STATUS_COLUMNS]
+        hours = sum(x.get("wall_s", {}).values()) / 3600
+        row = [x["slice"], x["steps"], x["first_step"] + x["steps"], x["images"], x.get("distinct_images", "-"),
+               f"{hours:.2f}", *figures]  # fmt: skip
+        rows.append("| " + " | ".join(str(r) for r in row) + " |")
+    return head + "\n".join(rows) + ("\n" if lines else "\n(no slice yet)\n")
+
+
+def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
+    """Remake the run's state from its plan and ledger (same seeds, same steps) and compare the weights."""
+    import torch
+
+    from centerart.models.checkpoint import load_shape_codes
+    from centerart.training.slice_training import load_state, new_state
+
+    run, work = Path(cfg.run), Path(cfg.work)
+    plan = load_plan(run)
+    if plan is None:
+        raise CenterArtError(f"{run}: no run.json (not a sliced run)")
+    lines = read_ledger(run)
+    target = check_run_files(run, lines)
+    if target is None:
+        raise CenterArtError(f"{run}: no slice to replay yet")
+    if cfg.threads > 0:
+        torch.set_num_threads(cfg.threads)
+    decoder = checked_decoder(plan)
+    folders = prepare_objects(plan, work, decoder, cfg.workers)
+    codes = load_shape_codes(decoder)
+    state = new_state(encoder_config(plan, codes), plan.seed, Path(plan.init) if plan.init else None)
+    for line in lines:
+        views = slice_views(folders, work / f"slice_{line['slice']:03d}", SliceData(**line["data"]), line["seeds"],
+                            decoder, cfg.workers)  # fmt: skip
+        if len(views) != line["images"]:
+            raise CenterArtError(f"slice {line['slice']}: rendered {len(views)} views, the ledger {line['images']}")
+        train_on(state, views, codes, plan, line, 0, {"workers": 0, "progress": cfg.progress})
+        echo(f"slice {line['slice']}: replayed {line['steps']} steps")
+    saved = load_state(target, state.encoder.config)
+    pairs = zip(state.encoder.state_dict().values(), saved.encoder.state_dict().values(), strict=True)
+    diff = max(float((a - b).abs().max()) for a, b in pairs)
+    result = {"slices": len(lines), "steps": state.step, "max_abs_weight_diff": diff, "tolerance": cfg.tolerance}
+    if state.step != saved.step or diff > cfg.tolerance:
+        raise CenterArtError(f"replay of {run} differs from its state.pt: steps {state.step} vs {saved.step}, "
+                             f"largest weight difference {diff:.3g} (tolerance {cfg.tolerance:g})")  # fmt: skip
+    return result

@@ -1,0 +1,101 @@
+"""``centerart slices`` (issue 29): a tiny run of two slices through the CLI, one of them stopped and resumed; its
+ledger replays to the same weights; a damaged ledger, a state another slice wrote, or a state of another layout is
+one error line naming the file, before any data is made."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+import torch
+
+from centerart.cli import main
+from centerart.models.checkpoint_files import file_sha256
+from centerart.models.encoder.checkpoint import load_encoder
+from centerart.models.encoder.config import PRESETS
+from centerart.recipe.ledger import read_ledger
+from centerart.training.slice_training import load_state, new_state, save_state
+
+COMMON = ["--threads", "1", "--workers", "1", "--no-progress"]
+
+
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory) -> tuple[Path, Path]:
+    """Two tiny slices; the first stopped after one of its three steps and resumed by a second call."""
+    root = tmp_path_factory.mktemp("slices")
+    run, work = root / "run", root / "work"
+    args = ["slices", "next", "--run", str(run), "--work", str(work), "--preset", "tiny", *COMMON]
+    assert main([*args, "--stop-after", "1"]) == 0
+    assert not (run / "ledger.jsonl").exists() and (work / "slice_001" / "progress.pt").is_file()
+    assert main(args) == 0
+    assert main([*args, "--steps", "2"]) == 0
+    return run, work
+
+
+@pytest.mark.slow  # ~40 s on 2 cores: 40 objects, 8 tiny scenes, two slices and their replay
+def test_two_slices_write_a_ledger_that_replays_to_the_same_weights(tiny_run, tmp_path, capsys):
+    run, _ = tiny_run
+    lines = read_ledger(run)
+    assert [x["slice"] for x in lines] == [1, 2] and [x["steps"] for x in lines] == [3, 2]
+    assert [x["first_step"] for x in lines] == [0, 3] and lines[1]["images_seen"] == 5 * 2
+    assert lines[0]["seeds"] != lines[1]["seeds"] and min(lines[0]["seeds"].values()) >= 100_000
+    assert lines[0]["images"] == 3 and lines[1]["distinct_images"] == 6
+    assert lines[1]["state_sha256"] == file_sha256(run / "state.pt")
+    assert lines[1]["encoder_sha256"] == file_sha256(run / "encoder.pt")
+    assert {"recall", "precision", "views"} <= set(lines[1]["validation"])
+    assert load_state(run / "state.pt").step == 5
+    # The exported encoder loads like any other (with the decoder it was trained against) and names its objects.
+    loaded = load_encoder(run / "encoder.pt")
+    assert loaded.encoder.config == PRESETS["tiny"].__class__(**{**PRESETS["tiny"].to_dict(), "code_dim": 32})
+    assert loaded.meta["metrics"]["val/views"] == 2
+    assert len(torch.load(run / "encoder.pt", weights_only=True)["training_objects"]) == 34
+
+    assert main(["slices", "status", "--run", str(run)]) == 0
+    table = capsys.readouterr().out
+    assert "| 2 | 2 | 5 | 3 | 6 |" in table
+    # The replay trains each slice in one go: equal weights also say the stopped-and-resumed slice 1 lost nothing.
+    assert main(["slices", "replay", "--run", str(run), "--work", str(tmp_path / "replay"), *COMMON]) == 0
+    assert "largest weight difference 0" in capsys.readouterr().out
+
+
+def _copy(tiny_run, tmp_path: Path) -> Path:
+    return Path(shutil.copytree(tiny_run[0], tmp_path / "run"))
+
+
+def _one_error_line(capsys, argv: list[str], names: str) -> str:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("centerart: error:") and "\n" not in err and "Traceback" not in err, err
+    assert names in err, err
+    return err
+
+
+@pytest.mark.slow  # shares the tiny run above
+@pytest.mark.parametrize("damage", ["not-json", "missing-field", "wrong-slice", "state-of-another-slice",
+                                    "state-missing", "state-of-another-layout"])  # fmt: skip
+def test_a_damaged_run_folder_is_one_error_line_and_no_data(tiny_run, tmp_path, capsys, damage):
+    run = _copy(tiny_run, tmp_path)
+    ledger = run / "ledger.jsonl"
+    lines = ledger.read_text().splitlines()
+    names = "ledger.jsonl"
+    if damage == "not-json":
+        ledger.write_text(lines[0] + "\n{oops\n")
+    elif damage == "missing-field":
+        ledger.write_text(json.dumps({k: v for k, v in json.loads(lines[0]).items() if k != "steps"}) + "\n")
+    elif damage == "wrong-slice":
+        ledger.write_text(lines[1] + "\n")
+    else:
+        names = "state.pt"
+        if damage == "state-of-another-slice":
+            ledger.write_text(lines[0] + "\n")
+        elif damage == "state-missing":
+            (run / "state.pt").unlink()
+        else:  # a state file of the small layout whose hash the ledger is made to name
+            save_state(run / "state.pt", new_state(PRESETS["small"], seed=0))
+            last = json.loads(lines[1]) | {"state_sha256": file_sha256(run / "state.pt")}
+            ledger.write_text(lines[0] + "\n" + json.dumps(last) + "\n")
+    work = tmp_path / "work"
+    _one_error_line(capsys, ["slices", "next", "--run", str(run), "--work", str(work), *COMMON], names)
+    assert not work.exists()
