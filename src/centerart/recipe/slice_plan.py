@@ -73,6 +73,7 @@ class SlicePlan:
     """Seed of the initial weights, batch order and augmentation."""
     init: str | None = None
     """Encoder checkpoint the run starts from (None: weights drawn from ``seed``)."""
+    init_sha256: str = ""
     batch_size: int = 8
     lr: float = 1e-3
     warmup_steps: int = 500

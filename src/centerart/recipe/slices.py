@@ -120,9 +120,16 @@ def create_plan(run: Path, preset: str, init: Path | None) -> SlicePlan:
     if init is not None:
         if not Path(init).is_file():
             raise CenterArtError(f"--init {init}: no such encoder checkpoint")
-        plan.init = str(Path(init).resolve())
+        plan.init, plan.init_sha256 = _plan_path(Path(init)), file_sha256(init)
     atomic_write_json(Path(run) / "run.json", plan.to_dict())
     return plan
+
+
+def _plan_path(path: Path) -> str:
+    """How a plan names a file: relative to the source tree's root when inside it (portable), else absolute."""
+    root = Path(__file__).resolve().parents[3]
+    path = path.resolve()
+    return str(path.relative_to(root)) if path.is_relative_to(root) else str(path)
 
 
 def _repo_path(path: str) -> Path:
@@ -132,11 +139,19 @@ def _repo_path(path: str) -> Path:
 
 
 def checked_decoder(plan: SlicePlan) -> Path:
+    return _checked_file(plan.decoder, plan.decoder_sha256, "the decoder this run trains against")
+
+
+def checked_init(plan: SlicePlan) -> Path | None:
+    return None if plan.init is None else _checked_file(plan.init, plan.init_sha256, "the encoder this run began from")
+
+
+def _checked_file(name: str, sha256: str, what: str) -> Path:
     from centerart.models.checkpoint_files import file_sha256
 
-    path = _repo_path(plan.decoder)
-    if not path.is_file() or file_sha256(path) != plan.decoder_sha256:
-        raise CenterArtError(f"{path}: not the decoder this run trains against (missing or SHA-256 differs)")
+    path = _repo_path(name)
+    if not path.is_file() or file_sha256(path) != sha256:
+        raise CenterArtError(f"{path}: not {what} (missing or SHA-256 differs; check out the commit that made the run)")
     return path
 
 
@@ -251,7 +266,7 @@ def start_state(plan: SlicePlan, run: Path, lines: list[dict], work_slice: Path,
     if lines:
         state = load_state(run / STATE, config)
     else:
-        state = new_state(config, plan.seed, Path(plan.init) if plan.init else None)
+        state = new_state(config, plan.seed, checked_init(plan), checked_decoder(plan))
     state.meta = {"start_sha": start_sha, "slice_step": 0}
     return state, 0
 
@@ -472,7 +487,7 @@ def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
     decoder = checked_decoder(plan)
     folders = prepare_objects(plan, work, decoder, cfg.workers)
     codes = load_shape_codes(decoder)
-    state = new_state(encoder_config(plan, codes), plan.seed, Path(plan.init) if plan.init else None)
+    state = new_state(encoder_config(plan, codes), plan.seed, checked_init(plan), decoder)
     for line in lines:
         views = slice_views(folders, work / f"slice_{line['slice']:03d}", SliceData(**line["data"]), line["seeds"],
                             decoder, cfg.workers)  # fmt: skip

@@ -64,14 +64,15 @@ class TrainState:
     meta: dict | None = None
 
 
-def new_state(config: EncoderConfig, seed: int, init: Path | None = None) -> TrainState:
-    """Weights drawn from ``seed`` (or copied from the encoder checkpoint ``init``), fresh Adam, step 0."""
+def new_state(config: EncoderConfig, seed: int, init: Path | None = None, decoder: Path | None = None) -> TrainState:
+    """Weights drawn from ``seed`` (or copied from the encoder checkpoint ``init``, which must have been trained
+    against ``decoder`` when given), fresh Adam, step 0."""
     torch.manual_seed(seed)
     encoder = RGBDEncoder(config)
     if init is not None:
         from centerart.models.encoder.checkpoint import load_encoder
 
-        loaded = load_encoder(init)
+        loaded = load_encoder(init, decoder)
         if loaded.encoder.config != config:
             raise CenterArtError(f"{init}: its encoder config differs from the run's; start the run from scratch")
         encoder.load_state_dict(loaded.encoder.state_dict())
