@@ -236,7 +236,9 @@ def slice_settings(plan: SlicePlan, cfg: SlicesNextConfig, index: int, saved: di
         "lr_scale": float(cfg.lr_scale),
     }
     if saved is None:
-        return settings
+        from centerart.utils.manifest import code_version
+
+        return settings | {"code_version": code_version()}  # the code that starts the slice
     given = {"steps": cfg.steps, "kitchen": cfg.kitchen, "single": cfg.single}
     now = {"steps": saved["steps"], "kitchen": saved["data"]["kitchen"], "single": saved["data"]["single"]}
     differ = [k for k, v in given.items() if v is not None and v != now[k]]
@@ -380,7 +382,7 @@ def _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder,
             "distinct_images": distinct, "images_seen": state.step * settings["batch_size"],
             "validation": {k: round(v, 5) for k, v in figures.items()},
             "wall_s": {k: round(v, 1) for k, v in wall.items()},
-            "state_sha256": file_sha256(staged), "code_version": code_version(), "threads": _threads(),
+            "state_sha256": file_sha256(staged), "finished_with": code_version(), "threads": _threads(),
             "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}  # fmt: skip
     _export_encoder(work_slice / "encoder.pt", state, plan, decoder, codes, line)
     line["encoder_sha256"] = file_sha256(work_slice / "encoder.pt")
