@@ -149,3 +149,43 @@ def blob_holes(
         axes = tuple(max(1, round(float(rng.uniform(*radius_px)) * scale)) for _ in range(2))
         cv2.ellipse(mask, centre, axes, float(rng.uniform(0, 180)), 0, 360, 1, -1)
     return mask
+
+
+#: True-depth bands (m) of :func:`error_bands`.
+ERROR_BANDS_M = ((0.5, 1.5), (1.5, 2.5), (2.5, 3.5), (3.5, 5.0))
+
+
+def error_bands(views: list[tuple[np.ndarray, np.ndarray]], skip_left_px: int = 0) -> dict:
+    """Error statistics of realistic depth against true depth over views ``[(true, realistic), ...]`` (H, W) m,
+    0 = nothing / hole: per band of true depth the median and 90th percentile of the absolute error of measured
+    pixels (mm) and the hole share; the hole share on depth edges (:func:`depth_edges`, 3 %) and off them; all
+    right of ``skip_left_px`` columns, whose hole share is reported alone (the matcher's blind band)."""
+    errors: dict = {b: [] for b in ERROR_BANDS_M}
+    counts = {key: np.zeros(2) for key in (*ERROR_BANDS_M, "edge", "flat", "left")}
+    for true, real in views:
+        true, real = np.asarray(true, np.float32), np.asarray(real, np.float32)
+        edges = depth_edges(true, 0.03)
+        seen = true > 0
+        counts["left"] += [(seen[:, :skip_left_px] & (real[:, :skip_left_px] == 0)).sum(), seen[:, :skip_left_px].sum()]
+        t, r, e, s = true[:, skip_left_px:], real[:, skip_left_px:], edges[:, skip_left_px:], seen[:, skip_left_px:]
+        hole = s & (r == 0)
+        counts["edge"] += [(hole & e).sum(), (s & e).sum()]
+        counts["flat"] += [(hole & ~e).sum(), (s & ~e).sum()]
+        for lo, hi in ERROR_BANDS_M:
+            band = s & (t >= lo) & (t < hi)
+            counts[(lo, hi)] += [(band & hole).sum(), band.sum()]
+            ok = band & ~hole
+            errors[(lo, hi)].append(np.abs(r[ok] - t[ok]))
+    out: dict = {}
+    for lo, hi in ERROR_BANDS_M:
+        e = np.concatenate(errors[(lo, hi)]) * 1000.0
+        n_hole, n = counts[(lo, hi)]
+        out[f"{lo}-{hi}m"] = {
+            "median_mm": round(float(np.median(e)), 1) if len(e) else None,
+            "p90_mm": round(float(np.percentile(e, 90)), 1) if len(e) else None,
+            "holes": round(float(n_hole / max(n, 1)), 4),
+            "pixels": int(n),
+        }
+    for key in ("edge", "flat", "left"):
+        out[f"{key}_holes"] = round(float(counts[key][0] / max(counts[key][1], 1)), 4)
+    return out
