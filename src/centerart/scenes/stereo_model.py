@@ -2,7 +2,7 @@
 
 Why: the encoder trains at 320x240. Matching an IR pair rendered at that size does not give the depth a full-size
 (640x480) stereo image has once the loader shrinks it: disparities halve, so the same sub-pixel matching error is
-twice the depth error, and the 7-px block spans twice the scene (measured: median errors 2.0-2.6x and holes 1.6-2.2x
+twice the depth error, and the 7-px block spans twice the scene (measured: median errors 2.0-2.6x and holes 1.6-3.3x
 those of the full-size sensor, ``benchmarks/results/cheap_scenes``). Rendering and matching the pair at full size
 costs more than the rest of a small image. This model instead applies what :func:`~centerart.scenes.depth_noise.
 stereo_depth` does at the reference resolution, measured on it, to the rasterised true depth:
