@@ -19,6 +19,8 @@ INTRINSICS_PRESETS: dict[str, tuple[int, int, float, float]] = {
     "d415": (640, 480, 615.0, 615.0),
     # The paper's camera (ZED 2 at half resolution): 960x512, f = 530 px.
     "paper": (960, 512, 530.0, 530.0),
+    # The d415 camera at half size: the small encoder's input (320x240), so the loader's letterbox is the identity.
+    "d415-half": (320, 240, 307.5, 307.5),
     # Small images for tests and quick previews.
     "tiny": (320, 240, 307.5, 307.5),
 }

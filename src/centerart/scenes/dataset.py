@@ -9,11 +9,14 @@ On-disk layout (all images PNG; depth in millimetres as uint16, 0 = no measureme
     OUT/scene_000000/views/00/
         rgb.png                       (H, W, 3) uint8
         depth_true.png                (H, W) uint16 mm, rasterised z-depth in the RGB camera frame
-        depth_realistic.png           (H, W) uint16 mm, stereo (IR pair + SGBM) or analytic noise; 0 = hole
+        depth_realistic.png           (H, W) uint16 mm, stereo (IR pair + SGBM), its error model, or analytic
+                                      noise; 0 = hole
         ir_left.png, ir_right.png     (H, W) uint8 IR pair with the dot pattern (stereo only)
         instances.png                 (H, W) uint8: 0 room/background, k + 1 = scene object k
         links.png                     (H, W) uint16: link ids, see labels.json objects[*].links
         heatmap.png                   (H, W) uint16 = round(heatmap * 65535), the paper's centre heatmap
+                                      (the three masks not with --no-save-masks; textures/ not with
+                                      --no-save-textures)
         labels.json                   K, world_T_camera, per visible object: pose, joint, visibility, ...
 
 A scene folder is written atomically (temporary folder, then rename), so a folder that exists is complete and a
@@ -74,10 +77,14 @@ class GenerateScenesConfig:
     views_per_scene: int = 2
     """Camera views rendered per scene."""
     seed: int = 0
-    depth: Literal["true", "stereo", "analytic"] = "stereo"
-    """Realistic depth: stereo (IR pair + SGBM), analytic (noise model), or true (no realistic depth)."""
-    intrinsics: Literal["d415", "paper", "tiny"] = "d415"
-    """d415: 640x480 fx=fy=615; paper: 960x512 f=530; tiny: 320x240 (tests)."""
+    depth: Literal["true", "stereo", "stereo-model", "analytic"] = "stereo"
+    """Realistic depth: stereo (IR pair + SGBM), stereo-model (the full-size stereo sensor's measured errors drawn
+    from the true depth, at any image size: :mod:`centerart.scenes.stereo_model`), analytic (noise model), or true
+    (no realistic depth)."""
+    intrinsics: Literal["d415", "d415-half", "paper", "tiny"] = "d415"
+    """d415: 640x480 fx=fy=615; d415-half: the same camera at 320x240, f=307.5 (the small encoder's input);
+    paper: 960x512 f=530; tiny: 320x240 (tests). Cheap encoder data: --intrinsics d415-half --depth stereo-model
+    --no-save-ir --no-save-masks --no-save-textures (docs/scenes.md, Speed)."""
     shader: Literal["default", "rt"] = "default"
     """default: rasteriser; rt: path-traced RGB (slow on CPU, noisy without a GPU denoiser)."""
     rt_samples_per_pixel: int = 4
@@ -90,6 +97,12 @@ class GenerateScenesConfig:
     """Decoder checkpoint whose shape codes fill each object's ``shape_code`` label (else null)."""
     save_ir: bool = True
     """Keep the IR pair images of the stereo sensor."""
+    save_masks: bool = True
+    """Write instances.png, links.png and heatmap.png. The encoder's training reads none of them (it rebuilds its
+    targets from labels.json); evaluation, ``scenes show`` and the encoder sheet need them."""
+    save_textures: bool = True
+    """Write the procedural textures into the scene folder. Without, scene.json names none and a renderer
+    makes each texture again from its kind, colour and seed (the same image)."""
     ir_shading: Literal["fast", "full"] = "fast"
     """Stereo IR pair: fast (unlit raster shaded from geometry, :mod:`centerart.scenes.ir_synthesis`: half the
     CPU time of a stereo image, the same depth-error bands) or full (SAPIEN's lit render with the projector as a
@@ -125,12 +138,12 @@ _RENDERERS: dict = {}
 _SHAPE_CODES: dict = {}
 
 
-def _renderer(shader: str, spp: int, ir_shading: str = "fast"):
+def _renderer(shader: str, spp: int, ir_shading: str = "fast", ir_cameras: bool = True):
     from centerart.scenes.renderer import SceneRenderer
 
-    key = (shader, spp, ir_shading)
+    key = (shader, spp, ir_shading, ir_cameras)
     if key not in _RENDERERS:
-        _RENDERERS[key] = SceneRenderer(shader, spp, ir_shading)
+        _RENDERERS[key] = SceneRenderer(shader, spp, ir_shading, ir_cameras)
     return _RENDERERS[key]
 
 
@@ -194,10 +207,12 @@ def render_scene_views(
     index: int,
     shape_codes=None,
     save_ir: bool = True,
+    save_masks: bool = True,
 ) -> list[dict]:
     """Render every view of a built scene into ``scene_dir/views``; returns per-view summaries."""
     from centerart.scenes.depth_noise import analytic_depth, stereo_depth, stereo_occlusion, to_ir_uint8
     from centerart.scenes.labels import view_labels
+    from centerart.scenes.stereo_model import modelled_stereo_depth
 
     summaries, meshes = [], {}
     K = np.asarray(scene.cameras[0].K, float)
@@ -216,16 +231,22 @@ def render_scene_views(
             if save_ir:
                 _write_png(view_dir / "ir_left.png", left)
                 _write_png(view_dir / "ir_right.png", right)
+        elif depth_mode == "stereo-model":
+            st = scene.stereo
+            realistic = modelled_stereo_depth(
+                images.depth, K, rng, st.left_offset_m, st.baseline_m, st.projector_offset_m
+            )
         elif depth_mode == "analytic":
             realistic = analytic_depth(images.depth, K, rng, baseline=scene.stereo.baseline_m)
         else:
             realistic = None
         if realistic is not None:
             _write_png(view_dir / "depth_realistic.png", depth_to_png(realistic))
-        _write_png(view_dir / "instances.png", images.instances)
-        _write_png(view_dir / "links.png", images.links)
         info, heat = view_labels(scene, objects, v, images.instances, renderer.link_ids, shape_codes, meshes)
-        _write_png(view_dir / "heatmap.png", np.round(heat * HEATMAP_SCALE).astype(np.uint16))
+        if save_masks:
+            _write_png(view_dir / "instances.png", images.instances)
+            _write_png(view_dir / "links.png", images.links)
+            _write_png(view_dir / "heatmap.png", np.round(heat * HEATMAP_SCALE).astype(np.uint16))
         info["depth_realistic"] = depth_mode if realistic is not None else None
         atomic_write_json(view_dir / "labels.json", info)
         summaries.append({"view": v, "visible_objects": len(info["objects"])})
@@ -255,11 +276,14 @@ def _generate_one(job: tuple) -> dict:
     codes = load_decoder_shape_codes(cfg.decoder_checkpoint) if cfg.decoder_checkpoint else None
     if cfg.workers is None or cfg.workers > 1:
         single_threaded_worker()
-    renderer = _renderer(cfg.shader, cfg.rt_samples_per_pixel, cfg.ir_shading)
+    renderer = _renderer(cfg.shader, cfg.rt_samples_per_pixel, cfg.ir_shading, ir_cameras=cfg.depth == "stereo")
     with atomic_directory(final) as tmp:
-        write_textures(scene, tmp)
+        if cfg.save_textures:
+            write_textures(scene, tmp)
         renderer.build(scene, tmp)
-        views = render_scene_views(renderer, scene, objects, tmp, cfg.depth, cfg.seed, index, codes, cfg.save_ir)
+        views = render_scene_views(
+            renderer, scene, objects, tmp, cfg.depth, cfg.seed, index, codes, cfg.save_ir, cfg.save_masks
+        )
         renderer.close()
         scene.save(tmp / "scene.json")
         record = {

@@ -47,7 +47,8 @@ class MaterialSpec:
     texture_scale_m: float = 0.5
     """Metres of surface covered by one repeat of the texture image."""
     texture: str | None = None
-    """Texture image file, relative to the scene folder (written by the generator), or None for untextured."""
+    """Texture image file, relative to the scene folder (written by the generator), or None: untextured for glass
+    and plain, else made by the renderer from kind, colour and seed (``scenes generate --no-save-textures``)."""
 
 
 @dataclass
