@@ -34,8 +34,8 @@ class SliceData:
     """Single-object scenes."""
     kitchen_views: int = 2
     single_views: int = 1
-    intrinsics: Literal["d415", "paper", "tiny"] = "d415"
-    depth: Literal["true", "stereo", "analytic"] = "stereo"
+    intrinsics: Literal["d415", "d415-half", "paper", "tiny"] = "d415"
+    depth: Literal["true", "stereo", "stereo-model", "analytic"] = "stereo"
     ir_shading: Literal["fast", "full"] = "fast"
 
     def images(self) -> int:

@@ -50,6 +50,11 @@ class SlicesNextConfig:
     """Kitchen scenes of this slice (default: the plan's)."""
     single: int | None = None
     """Single-object scenes of this slice (default: the plan's)."""
+    intrinsics: Literal["d415", "d415-half", "paper", "tiny"] | None = None
+    """Camera of this slice's scenes (default: the plan's). d415-half renders at the small encoder's input size."""
+    depth: Literal["true", "stereo", "stereo-model", "analytic"] | None = None
+    """Realistic depth of this slice's scenes (default: the plan's). stereo-model: the full-size stereo sensor's
+    measured errors drawn from the true depth, at any size (docs/scenes.md)."""
     lr_scale: float = 1.0
     """This slice's learning rate as a multiple of the plan's (lower it for the last slices of a run)."""
     stop_after: int | None = None
@@ -199,6 +204,7 @@ def render(objects: Path, out: Path, layout: str, count: int, views: int, seed: 
     generate_scenes(GenerateScenesConfig(
         objects=objects, out=out, layout=layout, count=count, views_per_scene=views, seed=seed, depth=data.depth,
         intrinsics=data.intrinsics, ir_shading=getattr(data, "ir_shading", "fast"), save_ir=False,
+        save_masks=False, save_textures=False,  # the encoder reads neither (rgb, depths and labels only)
         decoder_checkpoint=decoder, workers=workers,
     ))  # fmt: skip
     return checked_views([out])
@@ -225,8 +231,9 @@ def slice_settings(plan: SlicePlan, cfg: SlicesNextConfig, index: int, saved: di
     """What slice ``index`` renders and trains (the plan's defaults with this call's overrides); a resumed slice
     keeps the settings it started with and refuses different ones."""
     data = SliceData(**{**plan.data.__dict__})
-    data.kitchen = data.kitchen if cfg.kitchen is None else cfg.kitchen
-    data.single = data.single if cfg.single is None else cfg.single
+    for name in ("kitchen", "single", "intrinsics", "depth"):
+        if getattr(cfg, name) is not None:
+            setattr(data, name, getattr(cfg, name))
     settings = {
         "slice": index,
         "seeds": slice_seeds(index),
@@ -239,8 +246,8 @@ def slice_settings(plan: SlicePlan, cfg: SlicesNextConfig, index: int, saved: di
         from centerart.utils.manifest import code_version
 
         return settings | {"code_version": code_version()}  # the code that starts the slice
-    given = {"steps": cfg.steps, "kitchen": cfg.kitchen, "single": cfg.single}
-    now = {"steps": saved["steps"], "kitchen": saved["data"]["kitchen"], "single": saved["data"]["single"]}
+    given = {"steps": cfg.steps, **{k: getattr(cfg, k) for k in ("kitchen", "single", "intrinsics", "depth")}}
+    now = {"steps": saved["steps"], **saved["data"]}
     differ = [k for k, v in given.items() if v is not None and v != now[k]]
     if cfg.lr_scale != saved["lr_scale"]:
         differ.append("lr_scale")
