@@ -412,8 +412,7 @@ def _export_encoder(path: Path, state, plan: SlicePlan, decoder: Path, codes: di
     recorded = torch.load(decoder, map_location="cpu", weights_only=True)["training_objects"]
     train_config = {"sliced_run": plan.to_dict(), "slice": {k: v for k, v in line.items() if k != "validation"}}
     metrics = {f"val/{k}": v for k, v in line["validation"].items()}
-    encoder = state.encoder.to(memory_format=torch.contiguous_format)
-    save_encoder(path, encoder, decoder, sorted(codes), train_config, metrics, dict(recorded))
+    save_encoder(path, state.encoder, decoder, sorted(codes), train_config, metrics, dict(recorded))
 
 
 def _finish_pending(run: Path, lines: list[dict], work_slice: Path) -> bool:

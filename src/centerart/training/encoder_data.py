@@ -126,11 +126,7 @@ class EncoderViewDataset(Dataset):
 
 
 def collate(items: list[dict]) -> dict:
-    """Stack tensors; keep the per-item ``meta`` dicts as a list. Images come in channels-last memory order: the
-    layout oneDNN's CPU convolutions run fastest in (1.3x the training images/s on 2 cores with the model in the
-    same order: ``benchmarks/encoder_train_speed.py``)."""
+    """Stack tensors; keep the per-item ``meta`` dicts as a list."""
     out = {k: torch.stack([it[k] for it in items]) for k in items[0] if k != "meta"}
-    for key in ("rgb", "depth"):
-        out[key] = out[key].contiguous(memory_format=torch.channels_last)
     out["meta"] = [it["meta"] for it in items]
     return out

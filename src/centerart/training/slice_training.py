@@ -159,7 +159,6 @@ def run_steps(
     """Train ``state`` in place over ``loop.batches[start:]``; returns the slice step reached (stops early on
     ``loop.max_seconds``). ``on_step(slice_step, terms)`` runs after each step (progress, periodic saves)."""
     state.encoder.train()
-    state.encoder.to(memory_format=torch.channels_last)  # as the batches (encoder_data.collate)
     loader = DataLoader(
         EpochKeyed(dataset), batch_sampler=loop.batches[start:], collate_fn=collate, num_workers=loop.workers
     )
