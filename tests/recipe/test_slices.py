@@ -29,8 +29,9 @@ def tiny_run(tmp_path_factory) -> tuple[Path, Path]:
     args = ["slices", "next", "--run", str(run), "--work", str(work), "--preset", "tiny", *COMMON]
     assert main([*args, "--stop-after", "1"]) == 0
     assert not (run / "ledger.jsonl").exists() and (work / "slice_001" / "progress.pt").is_file()
+    assert main([*args, "--steps", "5"]) == 2  # a started slice keeps its settings
     assert main(args) == 0
-    assert main([*args, "--steps", "2"]) == 0
+    assert main([*args, "--steps", "2", "--depth", "stereo-model"]) == 0
     return run, work
 
 
@@ -42,6 +43,8 @@ def test_two_slices_write_a_ledger_that_replays_to_the_same_weights(tiny_run, tm
     assert [x["first_step"] for x in lines] == [0, 3] and lines[1]["images_seen"] == 5 * 2
     assert lines[0]["seeds"] != lines[1]["seeds"] and min(lines[0]["seeds"].values()) >= 100_000
     assert lines[0]["images"] == 3 and lines[1]["distinct_images"] == 6
+    assert lines[0]["data"]["depth"] == "analytic" and lines[1]["data"]["depth"] == "stereo-model"
+    assert lines[0]["code_version"] and lines[1]["finished_with"]
     assert lines[1]["state_sha256"] == file_sha256(run / "state.pt")
     assert lines[1]["encoder_sha256"] == file_sha256(run / "encoder.pt")
     assert {"recall", "precision", "views"} <= set(lines[1]["validation"])
