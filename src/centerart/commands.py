@@ -193,8 +193,10 @@ def slices_next(cfg) -> None:
     line = next_slice(cfg)
     if "stopped" in line:
         return
+    from centerart.recipe.slices import STATUS_COLUMNS
+
     v = line["validation"]
-    figures = ", ".join(f"{k} {v[k]:.3f}" for k in ("recall", "precision", "translation_m", "rotation_deg") if k in v)
+    figures = ", ".join(f"{k} {v[k]:.3f}" for k in STATUS_COLUMNS if k in v)
     print(f"slice {line['slice']} done: {line['steps']} steps, {line['images']} new images; validation: {figures}")
     if cfg.commit:
         print(commit_run(cfg.run, line))

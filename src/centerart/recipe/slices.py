@@ -352,6 +352,9 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
     val = validation_views(plan, folders, work, cfg.workers)
     views = slice_views(folders, work_slice, SliceData(**settings["data"]), settings["seeds"], decoder, cfg.workers)
     data_s = time.perf_counter() - t0
+    if not lines and "start_validation" not in settings and val:  # where the run starts, for its learning curve
+        settings["start_validation"] = _validation(state, val, codes)
+        atomic_write_json(saved, settings)
     options = {"workers": cfg.loader_workers, "max_seconds": cfg.max_minutes * 60, "stop_after": cfg.stop_after,
                "save": lambda s: _save_progress(s, work_slice), "progress": cfg.progress}  # fmt: skip
     t1 = time.perf_counter()
@@ -373,21 +376,19 @@ def _save_progress(state, work_slice: Path) -> None:
 def _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder, val, wall, images) -> dict:
     """Validate, then write state, encoder and ledger line (the line goes to ``WORK/slice_k/line.json`` first)."""
     from centerart.models.checkpoint_files import file_sha256
-    from centerart.training.encoder_data import EncoderViewDataset
-    from centerart.training.slice_training import save_state, validate
+    from centerart.training.slice_training import save_state
     from centerart.utils.atomic import atomic_write_json
     from centerart.utils.manifest import code_version
 
     t0 = time.perf_counter()
-    val_ds = EncoderViewDataset(val, state.encoder.config, codes, None) if val else None
-    figures = validate(state.encoder, val_ds, codes) if val_ds is not None else {}
+    figures = _validation(state, val, codes) if val else {}
     wall["validation"] = time.perf_counter() - t0
     state.meta = {"slices": settings["slice"]}
     staged = save_state(work_slice / STATE, state)
     distinct = images + sum(line["images"] for line in lines)
     line = {**settings, "first_step": state.step - settings["steps"], "images": images,
             "distinct_images": distinct, "images_seen": state.step * settings["batch_size"],
-            "validation": {k: round(v, 5) for k, v in figures.items()},
+            "validation": figures,
             "wall_s": {k: round(v, 1) for k, v in wall.items()},
             "state_sha256": file_sha256(staged), "finished_with": code_version(), "threads": _threads(),
             "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}  # fmt: skip
@@ -396,6 +397,15 @@ def _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder,
     atomic_write_json(work_slice / "line.json", line)
     _finish_pending(run, lines, work_slice)
     return line
+
+
+def _validation(state, views: list[Path], codes: dict) -> dict:
+    """The fixed validation set's figures for ``state``'s encoder (rounded for the ledger)."""
+    from centerart.training.encoder_data import EncoderViewDataset
+    from centerart.training.slice_training import validate
+
+    figures = validate(state.encoder, EncoderViewDataset(views, state.encoder.config, codes, None), codes)
+    return {k: round(v, 5) for k, v in figures.items()}
 
 
 def _threads() -> int:
@@ -451,7 +461,8 @@ def commit_run(run: Path, line: dict) -> str:
 
 
 # ---------------------------------------------------------------------------- status, replay
-STATUS_COLUMNS = ("recall", "precision", "translation_m", "rotation_deg")
+#: Validation figures of the status table and the command's summary (keys of encoder_metrics.summarize).
+STATUS_COLUMNS = ("recall", "precision", "translation_cm_median", "rotation_deg_median", "joint_type_accuracy")
 
 
 def status_table(run: Path) -> str:
