@@ -11,7 +11,7 @@ import torch
 
 from centerart.models.encoder.config import EncoderConfig
 from centerart.models.encoder.inputs import Letterbox
-from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
+from centerart.models.encoder.losses import EncoderLossConfig, code_scale, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder
 from centerart.models.encoder.readout import read_objects
 from centerart.training.encoder_metrics import summarize, view_metrics
@@ -27,12 +27,14 @@ class EncoderModule(L.LightningModule):
         self.loss_config = loss
         self.lr, self.epochs = lr, epochs
         self.codes = codes
+        # The codes' per-dimension scale, for the whitened shape loss (a buffer: it moves with the module's device).
+        self.register_buffer("code_std", code_scale(codes) if codes else torch.ones(config.code_dim), persistent=False)
         self._val_results: list[dict] = []
         self.save_hyperparameters({"encoder": config.to_dict(), "loss": loss.to_dict(), "lr": lr, "epochs": epochs})
 
     def forward(self, batch: dict):
         out = self.encoder(batch["rgb"], batch["depth"])
-        loss, terms = encoder_loss(out, batch, self.loss_config)
+        loss, terms = encoder_loss(out, batch, self.loss_config, self.code_std)
         return loss, terms, out
 
     def training_step(self, batch, batch_idx):
@@ -54,7 +56,9 @@ class EncoderModule(L.LightningModule):
         self.log("val/loss", loss, batch_size=bs)
         self.log_dict({f"val/{k}": v for k, v in terms.items()}, batch_size=bs)
         for b, meta in enumerate(batch["meta"]):
-            detections = read_objects(out, batch["K"][b].cpu().numpy(), index=b)
+            detections = read_objects(
+                out, batch["K"][b].cpu().numpy(), index=b, radius_cells=self.encoder.config.read_radius_cells
+            )
             labels = meta["labels"]
             cfg = self.encoder.config
             box = Letterbox.fit(labels["width"], labels["height"], cfg.input_width, cfg.input_height)  # no augmentation
@@ -74,10 +78,12 @@ class EncoderModule(L.LightningModule):
         steps_per_epoch = max(1, self.trainer.estimated_stepping_batches // max(self.epochs, 1))
         total = max(1, self.trainer.estimated_stepping_batches)
 
-        def factor(step: int) -> float:
-            if step < steps_per_epoch:
-                return WARMUP_START + (1 - WARMUP_START) * step / steps_per_epoch
-            return max(1e-3, (1 - step / total) ** POLY_POWER)
-
-        sched = torch.optim.lr_scheduler.LambdaLR(opt, factor)
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda step: lr_factor(step, steps_per_epoch, total))
         return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "step"}}
+
+
+def lr_factor(step: int, steps_per_epoch: int, total: int) -> float:
+    """The learning-rate multiplier at ``step``: linear warm-up over the first epoch, then poly decay to 0."""
+    if step < steps_per_epoch:
+        return WARMUP_START + (1 - WARMUP_START) * step / steps_per_epoch
+    return max(1e-3, (1 - step / total) ** POLY_POWER)

@@ -38,6 +38,10 @@ class EncoderConfig:
     rgb_std: float = 0.2
     max_depth_m: float = 6.0
     """Depth beyond this (m) is treated as a hole."""
+    read_radius_cells: int = 1
+    """Readout: an object's values are the heatmap-weighted mean over its instance region's stride cells within
+    this many cells (Chebyshev distance) of its peak; 0 reads the peak cell alone, a large value the whole region
+    (:func:`~centerart.models.encoder.readout.read_objects`)."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -49,8 +53,12 @@ class EncoderConfig:
         if unknown:
             raise ValueError(f"unknown encoder config fields {sorted(unknown)}")
         data = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
-        return cls(**data)
+        # A field added after a checkpoint was written takes the value that reproduces how that checkpoint was read.
+        return cls(**{**LEGACY_DEFAULTS, **data})
 
+
+LEGACY_DEFAULTS: dict[str, object] = {"read_radius_cells": 1}
+"""Values of fields that older checkpoints' configs lack: the behaviour those checkpoints were measured with."""
 
 PRESETS: dict[str, EncoderConfig] = {
     "tiny": EncoderConfig(

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+import numpy as np
 import torch
 import torch.nn.functional as F
 
@@ -32,6 +33,16 @@ class EncoderLossConfig:
     joint_state: float = 1.0
     min_cell_weight: float = 0.25
     """Cells whose target heatmap is at most this carry no object (the published 0.25)."""
+    pose_decoupled: bool = False
+    """Pose keypoints with rotation and translation errors apart: the origin keypoint carries the translation
+    error, the three axis tips the rotation error alone (tips placed about the *true* origin). Why: in the
+    published form every tip also carries the translation error, and while that is centimetres the tips'
+    gradient points along it, so the rotation gets little signal of its own. Same value for a perfect
+    translation."""
+    shape_whiten: bool = False
+    """Shape-code L1 on whitened codes: each dimension's error divided by the standard deviation of that
+    dimension over the decoder's codes (:func:`code_scale`), so every dimension counts by how much it varies
+    between objects, not by its raw size. Only the loss changes: the head still outputs raw codes."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -71,12 +82,23 @@ def keypoints(rotation: torch.Tensor, translation: torch.Tensor) -> torch.Tensor
     return torch.cat([translation[:, None, :], tips], dim=1)
 
 
-def encoder_loss(out: EncoderOutput, batch: dict, cfg: EncoderLossConfig) -> tuple[torch.Tensor, dict]:
-    """Weighted total loss and its terms (unweighted, detached) for logging."""
+def code_scale(codes: dict) -> torch.Tensor:
+    """(code_dim,) per-dimension standard deviation of the decoder's shape codes (floored at 1e-3)."""
+    stacked = torch.as_tensor(np.stack([np.asarray(c, np.float32) for c in codes.values()]))
+    return stacked.std(dim=0).clamp_min(1e-3) if len(stacked) > 1 else torch.ones(stacked.shape[1])
+
+
+def encoder_loss(
+    out: EncoderOutput, batch: dict, cfg: EncoderLossConfig, code_std: torch.Tensor | None = None
+) -> tuple[torch.Tensor, dict]:
+    """Weighted total loss and its terms (unweighted, detached) for logging. ``code_std`` (code_dim,): the
+    per-dimension scale of the shape codes, required with ``cfg.shape_whiten`` (see :func:`code_scale`)."""
+    if cfg.shape_whiten and code_std is None:
+        raise ValueError("EncoderLossConfig.shape_whiten needs the codes' per-dimension scale (code_std)")
     terms = {"heatmap": F.mse_loss(out.heatmap, batch["heatmap"])}
     cells = gather_object_cells(out, batch, cfg.min_cell_weight)
     if cells is not None:
-        terms.update(object_terms(cells))
+        terms.update(object_terms(cells, code_std if cfg.shape_whiten else None, cfg.pose_decoupled))
     total = sum(getattr(cfg, name) * value for name, value in terms.items())
     return total, {name: value.detach() for name, value in terms.items()}
 
@@ -85,15 +107,25 @@ def _weighted_mean(values: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
     return (values * weight).sum() / weight.sum().clamp_min(1e-6)
 
 
-def object_terms(cells: dict) -> dict[str, torch.Tensor]:
+def object_terms(
+    cells: dict, code_std: torch.Tensor | None = None, pose_decoupled: bool = False
+) -> dict[str, torch.Tensor]:
     p, t, w = cells["pred"], cells["target"], cells["weight"]
+    code_err = p["shape_code"] - t["shape_code"]
+    if code_std is not None:
+        code_err = code_err / code_std.to(code_err)
     rot = rotation_from_raw(p["rotation"])
     trans = object_translation(cells["cells"], p["center_offset"], p["center_depth"][:, 0], cells["K"])
-    kp_err = (keypoints(rot, trans) - keypoints(t["rotation"], t["translation"])).norm(dim=-1).mean(dim=1)
+    true_kp = keypoints(t["rotation"], t["translation"])
+    if pose_decoupled:  # the tips about the true origin measure the rotation only (see EncoderLossConfig)
+        tip_err = (keypoints(rot, t["translation"]) - true_kp)[:, 1:].norm(dim=-1).sum(dim=1)
+        kp_err = (trans - t["translation"]).norm(dim=-1) + tip_err / 4.0
+    else:
+        kp_err = (keypoints(rot, trans) - true_kp).norm(dim=-1).mean(dim=1)
     code_w = w * t["shape_code_valid"].float()
     terms = {
         "pose": _weighted_mean(kp_err, w),
-        "shape": _weighted_mean((p["shape_code"] - t["shape_code"]).abs().sum(dim=1), code_w),
+        "shape": _weighted_mean(code_err.abs().sum(dim=1), code_w),
         "joint_code": _weighted_mean((p["joint_code"][:, 0] - t["joint_code"]) ** 2, w),
         "joint_type": _weighted_mean(F.cross_entropy(p["joint_type_logits"], t["joint_type"], reduction="none"), w),
         "axis_direction": _weighted_mean(1.0 - (p["axis_direction"] * t["axis_direction"]).sum(dim=1), w),
