@@ -14,9 +14,10 @@ def test_tiny_encoder_overfits_three_single_views(single_dataset):
     )  # fmt: skip
     report, _ = overfit_encoder(cfg, codes={}, log=lambda _: None)
     overall = report["overall"]
-    # An untrained or broken pose head reads about 90 degrees and tens of cm; the fitted one a few of each.
+    # Measured: 5.5 deg, 0.4 cm, pose loss 0.025 after 150 steps (about 10 s on one free core); an untrained
+    # encoder finds nothing, and a pose head that does not learn reads tens of degrees and centimetres.
     assert overall["recall"] == 1.0, overall
-    assert overall["rotation_deg_median"] < 10.0, overall
-    assert overall["translation_cm_median"] < 4.0, overall
+    assert overall["rotation_deg_median"] < 8.0, overall
+    assert overall["translation_cm_median"] < 2.0, overall
     assert report["curve"][-1]["train_pose"] < 0.05
     assert np.isfinite(overall["rotation_deg_median_at_true_cells"])
