@@ -33,6 +33,10 @@ class EncoderLossConfig:
     joint_state: float = 1.0
     min_cell_weight: float = 0.25
     """Cells whose target heatmap is at most this carry no object (the published 0.25)."""
+    keypoint_arm_m: float = KEYPOINT_ARM_M
+    """Length (m) of the three axis keypoints of the pose loss: a rotation error of a radians moves a tip by
+    about arm * a, so the arm is the rotation's weight against the translation's (the published 0.1 m is a
+    fifth of a small cabinet's size)."""
     pose_decoupled: bool = False
     """Pose keypoints with rotation and translation errors apart: the origin keypoint carries the translation
     error, the three axis tips the rotation error alone (tips placed about the *true* origin). Why: in the
@@ -76,9 +80,9 @@ OBJECT_FIELDS = (
 )
 
 
-def keypoints(rotation: torch.Tensor, translation: torch.Tensor) -> torch.Tensor:
-    """(N, 4, 3): the origin and the tips of the three 0.1 m axes of each object frame."""
-    tips = translation[:, None, :] + KEYPOINT_ARM_M * rotation.transpose(1, 2)
+def keypoints(rotation: torch.Tensor, translation: torch.Tensor, arm: float = KEYPOINT_ARM_M) -> torch.Tensor:
+    """(N, 4, 3): the origin and the tips of the three ``arm`` (m) axes of each object frame."""
+    tips = translation[:, None, :] + arm * rotation.transpose(1, 2)
     return torch.cat([translation[:, None, :], tips], dim=1)
 
 
@@ -98,7 +102,9 @@ def encoder_loss(
     terms = {"heatmap": F.mse_loss(out.heatmap, batch["heatmap"])}
     cells = gather_object_cells(out, batch, cfg.min_cell_weight)
     if cells is not None:
-        terms.update(object_terms(cells, code_std if cfg.shape_whiten else None, cfg.pose_decoupled))
+        terms.update(
+            object_terms(cells, code_std if cfg.shape_whiten else None, cfg.pose_decoupled, cfg.keypoint_arm_m)
+        )
     total = sum(getattr(cfg, name) * value for name, value in terms.items())
     return total, {name: value.detach() for name, value in terms.items()}
 
@@ -108,7 +114,7 @@ def _weighted_mean(values: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
 
 
 def object_terms(
-    cells: dict, code_std: torch.Tensor | None = None, pose_decoupled: bool = False
+    cells: dict, code_std: torch.Tensor | None = None, pose_decoupled: bool = False, arm: float = KEYPOINT_ARM_M
 ) -> dict[str, torch.Tensor]:
     p, t, w = cells["pred"], cells["target"], cells["weight"]
     code_err = p["shape_code"] - t["shape_code"]
@@ -116,12 +122,12 @@ def object_terms(
         code_err = code_err / code_std.to(code_err)
     rot = rotation_from_raw(p["rotation"])
     trans = object_translation(cells["cells"], p["center_offset"], p["center_depth"][:, 0], cells["K"])
-    true_kp = keypoints(t["rotation"], t["translation"])
+    true_kp = keypoints(t["rotation"], t["translation"], arm)
     if pose_decoupled:  # the tips about the true origin measure the rotation only (see EncoderLossConfig)
-        tip_err = (keypoints(rot, t["translation"]) - true_kp)[:, 1:].norm(dim=-1).sum(dim=1)
+        tip_err = (keypoints(rot, t["translation"], arm) - true_kp)[:, 1:].norm(dim=-1).sum(dim=1)
         kp_err = (trans - t["translation"]).norm(dim=-1) + tip_err / 4.0
     else:
-        kp_err = (keypoints(rot, trans) - true_kp).norm(dim=-1).mean(dim=1)
+        kp_err = (keypoints(rot, trans, arm) - true_kp).norm(dim=-1).mean(dim=1)
     code_w = w * t["shape_code_valid"].float()
     terms = {
         "pose": _weighted_mean(kp_err, w),
