@@ -38,10 +38,13 @@ class EncoderConfig:
     rgb_std: float = 0.2
     max_depth_m: float = 6.0
     """Depth beyond this (m) is treated as a hole."""
-    read_radius_cells: int = 1
+    read_radius_cells: int | None = None
     """Readout: an object's values are the heatmap-weighted mean over its instance region's stride cells within
-    this many cells (Chebyshev distance) of its peak; 0 reads the peak cell alone, a large value the whole region
-    (:func:`~centerart.models.encoder.readout.read_objects`)."""
+    this many cells (Chebyshev distance) of its peak; 0 reads the peak cell alone, None the whole region
+    (:func:`~centerart.models.encoder.readout.read_objects`). Why None: on the 50-view overfit check
+    (``benchmarks/results/overfit_encoder/``) the whole region read translation at 0.8 cm and found every
+    object where 3x3 cells (1, the value before this field; older checkpoints keep it) read 1.6 cm and missed
+    two."""
 
     def to_dict(self) -> dict:
         return asdict(self)
