@@ -75,7 +75,7 @@ def test_decoupled_pose_loss_equals_published_when_either_error_is_zero():
     batch = _batch()
     out = enc(torch.rand(1, 3, 32, 48), torch.rand(1, 1, 32, 48) + 1)
     _perfect_pose(out, batch)
-    published, decoupled = EncoderLossConfig(), EncoderLossConfig(pose_decoupled=True)
+    published, decoupled = EncoderLossConfig(pose_decoupled=False), EncoderLossConfig(pose_decoupled=True)
     out.dense["rotation"].data[:] = torch.tensor([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]).reshape(9, 1, 1)  # 90 deg
     a, b = encoder_loss(out, batch, published)[1]["pose"], encoder_loss(out, batch, decoupled)[1]["pose"]
     assert float(a) > 0.05 and torch.allclose(a, b)
