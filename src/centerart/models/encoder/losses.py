@@ -38,7 +38,7 @@ class EncoderLossConfig:
     about arm * a, so the arm is the rotation's weight against the translation's. Why 0.5 m, about an object's
     half size, not the published 0.1 m (:data:`KEYPOINT_ARM_M`): with 0.1 m the rotation term was a few mm
     against centimetres of translation and the rotation did not fit its own training views; on the 50-view
-    overfit check (``benchmarks/results/overfit_encoder/``, 800 steps, decoupled) rotation 9.2 -> ~4 deg."""
+    overfit check (``benchmarks/results/overfit_encoder/``, 800 steps, decoupled) rotation 9.2 -> 3.6 deg."""
     pose_decoupled: bool = True
     """Pose keypoints with rotation and translation errors apart: the origin keypoint carries the translation
     error, the three axis tips the rotation error alone (tips placed about the *true* origin). Why: in the
