@@ -19,7 +19,7 @@ KEYS = (
     ("rotation_deg_median", "rotation (deg, median)"),
     ("translation_cm_median", "translation (cm, median)"),
     ("recall", "recall"),
-    ("train_shape", "shape loss (train batch)"),
+    ("shape_code_l1_mean", "shape code L1 per dimension"),
 )
 
 
@@ -36,12 +36,12 @@ def main() -> None:
     axes[0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(HERE / "curves.png", dpi=90)
-    print("| run | step | rotation deg | translation cm | recall | shape loss |")
+    print("| run | step | rotation deg | translation cm | recall | code L1 / dim |")
     print("|---|---|---|---|---|---|")
     for name, run in runs.items():
         for p in run["curve"]:
             print(f"| {name} | {p['step']} | {p['rotation_deg_median']:.1f} | {p['translation_cm_median']:.2f} | "
-                  f"{p['recall']:.2f} | {p['train_shape']:.3f} |")  # fmt: skip
+                  f"{p['recall']:.2f} | {p['shape_code_l1_mean']:.4f} |")  # fmt: skip
 
 
 if __name__ == "__main__":
