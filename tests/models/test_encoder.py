@@ -96,3 +96,21 @@ def test_config_dict_round_trip():
     assert EncoderConfig.from_dict(cfg.to_dict()) == cfg
     with pytest.raises(ValueError, match="unknown"):
         EncoderConfig.from_dict({"widthz": 3})
+
+
+def test_config_of_an_older_checkpoint_reads_as_it_was_measured():
+    old = {k: v for k, v in PRESETS["small"].to_dict().items() if k != "read_radius_cells"}
+    assert EncoderConfig.from_dict(old).read_radius_cells == 1
+
+
+def test_readout_radius_zero_reads_the_peak_cell_alone():
+    v, u = np.mgrid[0:64, 0:80]
+    heat = (0.9 * np.exp(-((u - 32) ** 2 + (v - 32) ** 2) / (2 * 10.0**2))).astype(np.float32)  # one wide object
+    enc = RGBDEncoder(PRESETS["tiny"]).eval()
+    with torch.no_grad():
+        out = enc(torch.rand(1, 3, 64, 80), torch.rand(1, 1, 64, 80) + 1)
+    out.heatmap = torch.from_numpy(heat)[None]
+    K = np.array([[100.0, 0, 39.5], [0, 100.0, 31.5], [0, 0, 1]])
+    peak_code = out.dense["shape_code"][0, :, 32 // 8, 32 // 8].numpy()
+    assert np.allclose(read_objects(out, K, radius_cells=0)[0].shape_code, peak_code, atol=1e-6)
+    assert not np.allclose(read_objects(out, K, radius_cells=3)[0].shape_code, peak_code, atol=1e-6)

@@ -104,3 +104,20 @@ def test_a_damaged_run_folder_is_one_error_line_and_no_data(tiny_run, tmp_path, 
     work = tmp_path / "work"
     _one_error_line(capsys, ["slices", "next", "--run", str(run), "--work", str(work), *COMMON], names)
     assert not work.exists()
+
+
+def test_a_plan_saved_before_new_fields_trains_as_it_did_then():
+    """Runs keep their loss and read-out when defaults change: plans without the recorded encoder config or the
+    newer loss fields get the values they were made with; new plans record today's."""
+    from centerart.models.encoder.losses import EncoderLossConfig
+    from centerart.recipe.slice_plan import SlicePlan
+    from centerart.recipe.slices import encoder_config
+
+    codes = {"a": [0.0] * 32}
+    old = encoder_config(SlicePlan(preset="small"), codes)
+    assert old.read_radius_cells == 1 and old.code_dim == 32
+    new = encoder_config(SlicePlan(preset="small", encoder=PRESETS["small"].to_dict()), codes)
+    assert new.read_radius_cells is None
+    legacy = EncoderLossConfig.from_dict({"heatmap": 100.0})
+    assert legacy.pose_decoupled is False and legacy.keypoint_arm_m == pytest.approx(0.1)
+    assert EncoderLossConfig.from_dict(EncoderLossConfig().to_dict()) == EncoderLossConfig()

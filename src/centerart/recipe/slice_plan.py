@@ -61,6 +61,8 @@ class SlicePlan:
 
     preset: str
     encoder_preset: Literal["tiny", "small", "paper"] = "small"
+    encoder: dict = field(default_factory=dict)
+    """The encoder config (code_dim aside) as the run was made; empty in plans saved before it was recorded."""
     decoder: str = "src/centerart/weights/sgdf_small.pt"
     """Decoder checkpoint whose shape codes are the targets (relative to the repository root, or absolute)."""
     decoder_sha256: str = ""

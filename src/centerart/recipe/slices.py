@@ -115,9 +115,11 @@ def load_plan(run: Path) -> SlicePlan | None:
 def create_plan(run: Path, preset: str, init: Path | None) -> SlicePlan:
     """A new run's plan from ``preset``, its decoder pinned by SHA-256, written to ``RUN/run.json``."""
     from centerart.models.checkpoint_files import file_sha256
+    from centerart.models.encoder.config import preset as encoder_preset
     from centerart.utils.atomic import atomic_write_json
 
     plan = plan_preset(preset)
+    plan.encoder = encoder_preset(plan.encoder_preset).to_dict()  # today's defaults, kept for every slice
     decoder = _repo_path(plan.decoder)
     if not decoder.is_file():
         raise CenterArtError(f"{decoder}: the plan's decoder checkpoint is missing")
@@ -257,9 +259,15 @@ def slice_settings(plan: SlicePlan, cfg: SlicesNextConfig, index: int, saved: di
 
 
 def encoder_config(plan: SlicePlan, codes: dict):
-    from centerart.models.encoder.config import preset
+    """The run's encoder config: the one its plan recorded, or (a plan saved before plans recorded it) the
+    preset's with the values of fields added since taken as they were then (``LEGACY_DEFAULTS``)."""
+    from centerart.models.encoder.config import LEGACY_DEFAULTS, EncoderConfig, preset
 
-    return preset(plan.encoder_preset, code_dim=len(next(iter(codes.values()))))
+    code_dim = len(next(iter(codes.values())))
+    if plan.encoder:
+        return EncoderConfig.from_dict({**plan.encoder, "code_dim": code_dim})
+    old = {k: v for k, v in preset(plan.encoder_preset).to_dict().items() if k not in LEGACY_DEFAULTS}
+    return EncoderConfig.from_dict({**old, "code_dim": code_dim})
 
 
 def start_state(plan: SlicePlan, run: Path, lines: list[dict], work_slice: Path, config):
@@ -287,7 +295,7 @@ def train_on(state, views, codes, plan: SlicePlan, settings: dict, start: int, o
     state, run every SAVE_EVERY_S seconds and at the end), ``progress``."""
     from tqdm import tqdm
 
-    from centerart.models.encoder.losses import EncoderLossConfig
+    from centerart.models.encoder.losses import EncoderLossConfig, code_scale
     from centerart.training.encoder_data import EncoderViewDataset
     from centerart.training.slice_training import SliceSchedule, StepLoop, run_steps, slice_batches
 
@@ -298,7 +306,8 @@ def train_on(state, views, codes, plan: SlicePlan, settings: dict, start: int, o
         views, state.encoder.config, codes, plan.augment_config(), seed=plan.seed * 100_000 + k
     )
     schedule = SliceSchedule(plan.lr, plan.warmup_steps, settings["lr_scale"])
-    loop = StepLoop(batches, schedule, EncoderLossConfig(**plan.loss), options.get("workers", 1),
+    loss = EncoderLossConfig.from_dict(plan.loss)  # a plan saved before a loss field trains as it did then
+    loop = StepLoop(batches, schedule, loss, code_scale(codes) if codes else None, options.get("workers", 1),
                     options.get("max_seconds", 0.0))  # fmt: skip
     bar = tqdm(total=steps, initial=start, desc=f"slice {k}", disable=not options.get("progress", True))
     last_save = [time.perf_counter()]

@@ -27,7 +27,7 @@ def batch_view_metrics(out, batch: dict, config, codes: dict | None = None) -> l
 
     results = []
     for b, meta in enumerate(batch["meta"]):
-        detections = read_objects(out, batch["K"][b].cpu().numpy(), index=b)
+        detections = read_objects(out, batch["K"][b].cpu().numpy(), index=b, radius_cells=config.read_radius_cells)
         labels = meta["labels"]
         box = Letterbox.fit(labels["width"], labels["height"], config.input_width, config.input_height)
         for d in detections:

@@ -10,7 +10,7 @@ import lightning as L
 import torch
 
 from centerart.models.encoder.config import EncoderConfig
-from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
+from centerart.models.encoder.losses import EncoderLossConfig, code_scale, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder
 from centerart.training.encoder_metrics import batch_view_metrics, summarize
 
@@ -25,12 +25,14 @@ class EncoderModule(L.LightningModule):
         self.loss_config = loss
         self.lr, self.epochs = lr, epochs
         self.codes = codes
+        # The codes' per-dimension scale, for the whitened shape loss (a buffer: it moves with the module's device).
+        self.register_buffer("code_std", code_scale(codes) if codes else torch.ones(config.code_dim), persistent=False)
         self._val_results: list[dict] = []
         self.save_hyperparameters({"encoder": config.to_dict(), "loss": loss.to_dict(), "lr": lr, "epochs": epochs})
 
     def forward(self, batch: dict):
         out = self.encoder(batch["rgb"], batch["depth"])
-        loss, terms = encoder_loss(out, batch, self.loss_config)
+        loss, terms = encoder_loss(out, batch, self.loss_config, self.code_std)
         return loss, terms, out
 
     def training_step(self, batch, batch_idx):
@@ -65,10 +67,12 @@ class EncoderModule(L.LightningModule):
         steps_per_epoch = max(1, self.trainer.estimated_stepping_batches // max(self.epochs, 1))
         total = max(1, self.trainer.estimated_stepping_batches)
 
-        def factor(step: int) -> float:
-            if step < steps_per_epoch:
-                return WARMUP_START + (1 - WARMUP_START) * step / steps_per_epoch
-            return max(1e-3, (1 - step / total) ** POLY_POWER)
-
-        sched = torch.optim.lr_scheduler.LambdaLR(opt, factor)
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda step: lr_factor(step, steps_per_epoch, total))
         return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "step"}}
+
+
+def lr_factor(step: int, steps_per_epoch: int, total: int) -> float:
+    """The learning-rate multiplier at ``step``: linear warm-up over the first epoch, then poly decay to 0."""
+    if step < steps_per_epoch:
+        return WARMUP_START + (1 - WARMUP_START) * step / steps_per_epoch
+    return max(1e-3, (1 - step / total) ** POLY_POWER)

@@ -31,7 +31,7 @@ from torch.utils.data import DataLoader, Dataset
 
 from centerart.errors import CenterArtError
 from centerart.models.checkpoint_files import check_fields, read_blob, write_blob
-from centerart.models.encoder.config import EncoderConfig
+from centerart.models.encoder.config import EncoderConfig, same_weights_layout
 from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder
 from centerart.training.encoder_data import EncoderViewDataset, collate
@@ -73,8 +73,8 @@ def new_state(config: EncoderConfig, seed: int, init: Path | None = None, decode
         from centerart.models.encoder.checkpoint import load_encoder
 
         loaded = load_encoder(init, decoder)
-        if loaded.encoder.config != config:
-            raise CenterArtError(f"{init}: its encoder config differs from the run's; start the run from scratch")
+        if not same_weights_layout(loaded.encoder.config, config):  # the run's read-out may differ from init's
+            raise CenterArtError(f"{init}: its encoder layout differs from the run's; start the run from scratch")
         encoder.load_state_dict(loaded.encoder.state_dict())
     return TrainState(encoder, torch.optim.Adam(encoder.parameters(), lr=1e-3), 0, {})
 
@@ -147,6 +147,8 @@ class StepLoop:
     batches: list[list[int]]
     schedule: SliceSchedule
     loss: EncoderLossConfig
+    code_std: torch.Tensor | None = None
+    """Per-dimension scale of the shape codes (``losses.code_scale``), for ``loss.shape_whiten``."""
     workers: int = 1
     max_seconds: float = 0.0
     """Stop after this much time (0: no limit); the caller saves the state and a rerun resumes."""
@@ -167,7 +169,7 @@ def run_steps(
         for group in state.optimizer.param_groups:
             group["lr"] = loop.schedule.lr_at(state.step)
         out = state.encoder(batch["rgb"], batch["depth"])
-        loss, terms = encoder_loss(out, batch, loop.loss)
+        loss, terms = encoder_loss(out, batch, loop.loss, loop.code_std)
         state.optimizer.zero_grad(set_to_none=True)
         loss.backward()
         state.optimizer.step()

@@ -38,6 +38,13 @@ class EncoderConfig:
     rgb_std: float = 0.2
     max_depth_m: float = 6.0
     """Depth beyond this (m) is treated as a hole."""
+    read_radius_cells: int | None = None
+    """Readout: an object's values are the heatmap-weighted mean over its instance region's stride cells within
+    this many cells (Chebyshev distance) of its peak; 0 reads the peak cell alone, None the whole region
+    (:func:`~centerart.models.encoder.readout.read_objects`). Why None: on the 50-view overfit check
+    (``benchmarks/results/overfit_encoder/``) the whole region read translation at 0.8 cm and found every
+    object where 3x3 cells (1, the value before this field; older checkpoints keep it) read 1.6 cm and missed
+    two."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -49,7 +56,21 @@ class EncoderConfig:
         if unknown:
             raise ValueError(f"unknown encoder config fields {sorted(unknown)}")
         data = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
-        return cls(**data)
+        # A field added after a checkpoint was written takes the value that reproduces how that checkpoint was read.
+        return cls(**{**LEGACY_DEFAULTS, **data})
+
+
+LEGACY_DEFAULTS: dict[str, object] = {"read_radius_cells": 1}
+"""Values of fields that older checkpoints' configs lack: the behaviour those checkpoints were measured with."""
+READOUT_FIELDS = frozenset({"read_radius_cells"})
+"""Fields that change how the outputs are read, not the weights: two configs that differ only in these hold
+interchangeable weights."""
+
+
+def same_weights_layout(a: EncoderConfig, b: EncoderConfig) -> bool:
+    """Whether weights of one config load into the other with the same meaning (all but :data:`READOUT_FIELDS`)."""
+    a_dict, b_dict = a.to_dict(), b.to_dict()
+    return all(a_dict[k] == b_dict[k] for k in a_dict if k not in READOUT_FIELDS)
 
 
 PRESETS: dict[str, EncoderConfig] = {

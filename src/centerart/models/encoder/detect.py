@@ -46,7 +46,9 @@ def detect_objects(
     rgb_t, depth_t = to_tensors(rgb_in, depth_in)
     device = next(encoder.parameters()).device
     out = encoder(rgb_t[None].to(device), depth_t[None].to(device))
-    dets = read_objects(out, box.intrinsics(camera).K, peak_threshold=peak_threshold)
+    dets = read_objects(
+        out, box.intrinsics(camera).K, peak_threshold=peak_threshold, radius_cells=cfg.read_radius_cells
+    )
     for d in dets:
         d.peak_uv = box.to_camera_pixels(d.peak_uv)
         d.mask = back_to_camera(d.mask.astype(np.uint8), box, camera.width, camera.height, nearest=True) > 0

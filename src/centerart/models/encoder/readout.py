@@ -4,9 +4,9 @@ Thresholds (documented, in code, printed by reports that use them):
 
 - a peak is a local maximum of the heatmap at least ``PEAK_MIN_DISTANCE_FRACTION`` of the image width away
   from a higher one and above ``peak_threshold`` (default :data:`PEAK_THRESHOLD`);
-- an object's values are the heatmap-weighted mean over the stride cells within ``READ_RADIUS_CELLS`` of its
-  peak whose centres the object's instance region covers (rotations are averaged as raw matrices, then
-  projected to SO(3));
+- an object's values are the heatmap-weighted mean over the stride cells within ``radius_cells`` (the encoder
+  config's ``read_radius_cells``; None: no limit) of its peak whose centres the object's instance region
+  covers (rotations are averaged as raw matrices, then projected to SO(3));
 - instance regions: watershed of the negated heatmap from the peaks, restricted to heatmap > ``MASK_THRESHOLD``.
 
 Every quantity is in the OpenCV camera frame (m, rad), which the letterboxed input shares with the camera.
@@ -30,7 +30,7 @@ from centerart.models.encoder.network import (
 PEAK_THRESHOLD = 0.5
 PEAK_MIN_DISTANCE_FRACTION = 1.0 / 64.0  # the published 10 px at 960 px width is about 1/96; a little wider
 MASK_THRESHOLD = 0.25
-READ_RADIUS_CELLS = 1
+READ_RADIUS_CELLS = 1  # read_objects's default: the 3x3 cells read before EncoderConfig.read_radius_cells
 
 
 @dataclass
@@ -70,9 +70,15 @@ def instance_regions(heatmap: np.ndarray, peaks_uv: np.ndarray) -> np.ndarray:
 
 
 def read_objects(
-    out: EncoderOutput, K: np.ndarray, index: int = 0, peak_threshold: float = PEAK_THRESHOLD
+    out: EncoderOutput,
+    K: np.ndarray,
+    index: int = 0,
+    peak_threshold: float = PEAK_THRESHOLD,
+    radius_cells: int | None = READ_RADIUS_CELLS,
 ) -> list[Detection]:
-    """Detections of image ``index`` of a batch of encoder outputs; ``K`` is the input's 3x3 intrinsics."""
+    """Detections of image ``index`` of a batch of encoder outputs; ``K`` is the input's 3x3 intrinsics; values are
+    read over the region's cells within ``radius_cells`` of each peak, None: the whole region (pass the encoder
+    config's ``read_radius_cells``)."""
     heat = out.heatmap[index].detach().float().cpu().numpy()
     peaks = find_peaks(heat, peak_threshold)
     if len(peaks) == 0:
@@ -85,15 +91,15 @@ def read_objects(
     cv = np.clip(np.round(centers[..., 1]).astype(int), 0, heat.shape[0] - 1)
     cell_region, cell_heat = regions[cv, cu], heat[cv, cu]
     return [
-        _read_one(dense, centers, cell_region, cell_heat, k, peak, heat, K, regions == k + 1, out.stride)
+        _read_one(dense, centers, cell_region, cell_heat, k, peak, heat, K, regions == k + 1, out.stride, radius_cells)
         for k, peak in enumerate(peaks)
     ]
 
 
-def _read_one(dense, centers, cell_region, cell_heat, k, peak, heat, K, mask, stride) -> Detection:
+def _read_one(dense, centers, cell_region, cell_heat, k, peak, heat, K, mask, stride, radius) -> Detection:
     ci, cj = int(peak[1]) // stride, int(peak[0]) // stride
     ii, jj = np.mgrid[0 : cell_region.shape[0], 0 : cell_region.shape[1]]
-    near = (np.abs(ii - ci) <= READ_RADIUS_CELLS) & (np.abs(jj - cj) <= READ_RADIUS_CELLS)
+    near = True if radius is None else (np.abs(ii - ci) <= radius) & (np.abs(jj - cj) <= radius)
     use = near & (cell_region == k + 1)
     use[min(ci, use.shape[0] - 1), min(cj, use.shape[1] - 1)] = True
     sel = torch.from_numpy(use)
