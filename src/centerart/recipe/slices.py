@@ -18,6 +18,7 @@ finished by the next call from ``WORK/slice_k/line.json``), and with ``--commit`
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import time
 from dataclasses import dataclass
@@ -127,7 +128,10 @@ def create_plan(run: Path, preset: str, init: Path | None) -> SlicePlan:
     if init is not None:
         if not Path(init).is_file():
             raise CenterArtError(f"--init {init}: no such encoder checkpoint")
-        plan.init, plan.init_sha256 = _plan_path(Path(init)), file_sha256(init)
+        # A copy in the run folder: the file it came from (the shipped encoder) may be replaced by this very run.
+        Path(run).mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(init, Path(run) / "init.pt")
+        plan.init, plan.init_sha256 = _plan_path(Path(run) / "init.pt"), file_sha256(init)
     atomic_write_json(Path(run) / "run.json", plan.to_dict())
     return plan
 
@@ -438,7 +442,6 @@ def _finish_pending(run: Path, lines: list[dict], work_slice: Path) -> bool:
     """Copy a finished slice's files from WORK into RUN, then append its line (last: the line is the commit
     point). False when the staged files are not the next slice's (then nothing is touched)."""
     import json
-    import shutil
 
     from centerart.models.checkpoint_files import file_sha256
 
