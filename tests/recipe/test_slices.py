@@ -121,3 +121,20 @@ def test_a_plan_saved_before_new_fields_trains_as_it_did_then():
     legacy = EncoderLossConfig.from_dict({"heatmap": 100.0})
     assert legacy.pose_decoupled is False and legacy.keypoint_arm_m == pytest.approx(0.1)
     assert EncoderLossConfig.from_dict(EncoderLossConfig().to_dict()) == EncoderLossConfig()
+
+
+def test_a_run_started_from_a_sliced_runs_encoder_takes_another_seed_block(tmp_path, capsys):
+    """The shipped encoder came out of slices of seed block 0: a run from it must render other scenes."""
+    from centerart.models.encoder.checkpoint import default_encoder
+    from centerart.recipe.slice_plan import slice_seeds
+    from centerart.recipe.slices import create_plan
+
+    args = ["slices", "next", "--run", str(tmp_path / "run"), "--work", str(tmp_path / "work"),
+            "--init", str(default_encoder()), *COMMON]  # fmt: skip
+    _one_error_line(capsys, args, "--seed-block 1")
+    assert not (tmp_path / "work").exists() and not (tmp_path / "run").exists()
+    plan = create_plan(tmp_path / "run2", "small", default_encoder(), seed_block=1)
+    assert plan.seed_block == 1 and (tmp_path / "run2" / "init.pt").is_file()
+    assert set(slice_seeds(1, 1).values()).isdisjoint(
+        slice_seeds(k, 0)[s] for k in range(1, 999) for s in ("kitchen", "single")
+    )

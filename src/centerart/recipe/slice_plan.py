@@ -22,6 +22,9 @@ from centerart.training.encoder_augment import AugmentConfig
 SLICE_SEED_BASE = 100_000
 SLICE_SEED_STRIDE = 1_000
 SINGLE_OFFSET = 500
+#: A run's ``seed_block`` b moves its seeds by b x SEED_BLOCK_STRIDE: runs that continue one another's encoder
+#: (``--init`` of a sliced run's output) draw other scenes than the ones their start was trained on.
+SEED_BLOCK_STRIDE = 1_000_000
 
 
 @dataclass
@@ -73,6 +76,9 @@ class SlicePlan:
     variety: Literal["classic", "extended"] = "classic"
     seed: int = 0
     """Seed of the initial weights, batch order and augmentation."""
+    seed_block: int = 0
+    """Block of scene seeds of this run (:func:`slice_seeds`); a run started from another run's encoder takes
+    another block."""
     init: str | None = None
     """Encoder checkpoint the run starts from (None: weights drawn from ``seed``)."""
     init_sha256: str = ""
@@ -106,9 +112,9 @@ class SlicePlan:
         return AugmentConfig(**cfg)
 
 
-def slice_seeds(index: int) -> dict[str, int]:
-    """Scene seeds of slice ``index`` (1-based)."""
-    kitchen = SLICE_SEED_BASE + SLICE_SEED_STRIDE * index
+def slice_seeds(index: int, block: int = 0) -> dict[str, int]:
+    """Scene seeds of slice ``index`` (1-based) of a run with seed block ``block``."""
+    kitchen = SLICE_SEED_BASE + SEED_BLOCK_STRIDE * block + SLICE_SEED_STRIDE * index
     return {"kitchen": kitchen, "single": kitchen + SINGLE_OFFSET}
 
 

@@ -45,6 +45,9 @@ class SlicesNextConfig:
     """Plan of a new run (ignored once RUN/run.json exists)."""
     init: Path | None = None
     """A new run starts from this encoder checkpoint instead of random weights (ignored once the run exists)."""
+    seed_block: int = 0
+    """Scene-seed block of a new run (ignored once the run exists); an --init made by a sliced run needs
+    another block than that run's, so that no slice repeats the scenes its start was trained on."""
     steps: int | None = None
     """Optimizer steps of this slice (default: the plan's)."""
     kitchen: int | None = None
@@ -76,7 +79,7 @@ class SlicesNextConfig:
             if getattr(self, name) is not None:
                 at_least(f"--{name.replace('_', '-')}", getattr(self, name), 0 if name != "steps" else 1)
         positive("--lr-scale", self.lr_scale)
-        for name in ("max_minutes", "loader_workers", "threads"):
+        for name in ("max_minutes", "loader_workers", "threads", "seed_block"):
             at_least(f"--{name.replace('_', '-')}", getattr(self, name), 0)
 
 
@@ -113,7 +116,7 @@ def load_plan(run: Path) -> SlicePlan | None:
         raise CenterArtError(f"{path}: damaged run plan ({err})") from None
 
 
-def create_plan(run: Path, preset: str, init: Path | None) -> SlicePlan:
+def create_plan(run: Path, preset: str, init: Path | None, seed_block: int = 0) -> SlicePlan:
     """A new run's plan from ``preset``, its decoder pinned by SHA-256, written to ``RUN/run.json``."""
     from centerart.models.checkpoint_files import file_sha256
     from centerart.models.encoder.config import preset as encoder_preset
@@ -125,15 +128,32 @@ def create_plan(run: Path, preset: str, init: Path | None) -> SlicePlan:
     if not decoder.is_file():
         raise CenterArtError(f"{decoder}: the plan's decoder checkpoint is missing")
     plan.decoder_sha256 = file_sha256(decoder)
+    plan.seed_block = seed_block
     if init is not None:
         if not Path(init).is_file():
             raise CenterArtError(f"--init {init}: no such encoder checkpoint")
+        _check_seed_block(Path(init), seed_block)
         # A copy in the run folder: the file it came from (the shipped encoder) may be replaced by this very run.
         Path(run).mkdir(parents=True, exist_ok=True)
         shutil.copyfile(init, Path(run) / "init.pt")
         plan.init, plan.init_sha256 = _plan_path(Path(run) / "init.pt"), file_sha256(init)
     atomic_write_json(Path(run) / "run.json", plan.to_dict())
     return plan
+
+
+def _check_seed_block(init: Path, seed_block: int) -> None:
+    """Refuse a new run whose scenes would repeat those the --init encoder was trained on in a sliced run."""
+    import torch
+
+    try:
+        trained = (torch.load(init, map_location="cpu", weights_only=True).get("train_config") or {}).get("sliced_run")
+    except Exception:  # a damaged file: new_state reports it (load_encoder's one-line error)
+        return
+    if isinstance(trained, dict) and int(trained.get("seed_block", 0)) == seed_block:
+        raise CenterArtError(
+            f"--init {init}: trained on slices of seed block {seed_block}; pass --seed-block {seed_block + 1} so the "
+            "new run renders other scenes"
+        )
 
 
 def _plan_path(path: Path) -> str:
@@ -242,7 +262,7 @@ def slice_settings(plan: SlicePlan, cfg: SlicesNextConfig, index: int, saved: di
             setattr(data, name, getattr(cfg, name))
     settings = {
         "slice": index,
-        "seeds": slice_seeds(index),
+        "seeds": slice_seeds(index, plan.seed_block),
         "data": dict(data.__dict__),
         "steps": plan.steps if cfg.steps is None else cfg.steps,
         "batch_size": plan.batch_size,
@@ -342,8 +362,7 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
     from centerart.utils.atomic import atomic_write_json
 
     run, work = Path(cfg.run), Path(cfg.work)
-    run.mkdir(parents=True, exist_ok=True)
-    plan = load_plan(run) or create_plan(run, cfg.preset, cfg.init)
+    plan = load_plan(run) or create_plan(run, cfg.preset, cfg.init, cfg.seed_block)
     lines = read_ledger(run)
     k = len(lines) + 1
     work_slice = work / f"slice_{k:03d}"
