@@ -27,12 +27,10 @@ import torch
 
 from centerart.geometry.transforms import rotation_angle_between
 from centerart.models.encoder.config import PRESETS
-from centerart.models.encoder.inputs import Letterbox
 from centerart.models.encoder.losses import EncoderLossConfig, code_scale, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder, cell_centers, object_translation, rotation_from_raw
-from centerart.models.encoder.readout import read_objects
 from centerart.training.encoder_data import EncoderViewDataset, collate, collect_views
-from centerart.training.encoder_metrics import summarize, summarize_by_category, view_metrics
+from centerart.training.encoder_metrics import batch_detections, summarize, summarize_by_category, view_metrics
 from centerart.training.encoder_module import lr_factor
 
 
@@ -133,13 +131,8 @@ def measure(model: RGBDEncoder, items: list[dict], codes: dict, chunk: int = 10)
     for start in range(0, len(items), chunk):
         batch = collate(items[start : start + chunk])
         out = model(batch["rgb"], batch["depth"])
-        for b, meta in enumerate(batch["meta"]):
+        for dets, meta in zip(batch_detections(out, batch, model.config), batch["meta"], strict=True):
             labels = meta["labels"]
-            cfg = model.config
-            dets = read_objects(out, batch["K"][b].numpy(), index=b, radius_cells=cfg.read_radius_cells)
-            box = Letterbox.fit(labels["width"], labels["height"], cfg.input_width, cfg.input_height)
-            for d in dets:
-                d.peak_uv = box.to_camera_pixels(d.peak_uv)
             res = view_metrics(dets, labels, codes)
             results.append(res)
             matched += [

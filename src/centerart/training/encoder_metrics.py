@@ -19,21 +19,27 @@ MATCH_DISTANCE_M = 0.10
 MIN_VISIBLE_FRACTION = 0.3
 
 
-def batch_view_metrics(out, batch: dict, config, codes: dict | None = None) -> list[dict]:
-    """:func:`view_metrics` of every view of an un-augmented batch (its letterbox is the plain fit): the read-out
-    objects' peaks are mapped back to the labelled camera's pixels first. ``config``: the encoder's config."""
+def batch_detections(out, batch: dict, config) -> list[list[Detection]]:
+    """The read-out objects of every view of an un-augmented batch (its letterbox is the plain fit), their peaks
+    mapped back to the labelled camera's pixels. ``config``: the encoder's config (input size, read-out radius)."""
     from centerart.models.encoder.inputs import Letterbox
     from centerart.models.encoder.readout import read_objects
 
-    results = []
+    views = []
     for b, meta in enumerate(batch["meta"]):
         detections = read_objects(out, batch["K"][b].cpu().numpy(), index=b, radius_cells=config.read_radius_cells)
         labels = meta["labels"]
         box = Letterbox.fit(labels["width"], labels["height"], config.input_width, config.input_height)
         for d in detections:
             d.peak_uv = box.to_camera_pixels(d.peak_uv)
-        results.append(view_metrics(detections, labels, codes))
-    return results
+        views.append(detections)
+    return views
+
+
+def batch_view_metrics(out, batch: dict, config, codes: dict | None = None) -> list[dict]:
+    """:func:`view_metrics` of every view of an un-augmented batch (:func:`batch_detections`)."""
+    detections = batch_detections(out, batch, config)
+    return [view_metrics(d, meta["labels"], codes) for d, meta in zip(detections, batch["meta"], strict=True)]
 
 
 def view_metrics(detections: list[Detection], labels: dict, codes: dict | None = None) -> dict:
