@@ -31,7 +31,7 @@ from centerart.models.encoder.losses import EncoderLossConfig, code_scale, encod
 from centerart.models.encoder.network import RGBDEncoder, cell_centers, object_translation, rotation_from_raw
 from centerart.training.encoder_data import EncoderViewDataset, collate, collect_views
 from centerart.training.encoder_metrics import batch_detections, summarize, summarize_by_category, view_metrics
-from centerart.training.encoder_module import lr_factor
+from centerart.training.schedules import lr_factor
 
 
 @dataclass

@@ -13,9 +13,7 @@ from centerart.models.encoder.config import EncoderConfig
 from centerart.models.encoder.losses import EncoderLossConfig, code_scale, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder
 from centerart.training.encoder_metrics import batch_view_metrics, summarize
-
-WARMUP_START = 0.2  # the published schedule: one epoch of linear warm-up from 0.2 x lr, then poly(0.9) decay
-POLY_POWER = 0.9
+from centerart.training.schedules import lr_factor
 
 
 class EncoderModule(L.LightningModule):
@@ -69,10 +67,3 @@ class EncoderModule(L.LightningModule):
 
         sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda step: lr_factor(step, steps_per_epoch, total))
         return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "interval": "step"}}
-
-
-def lr_factor(step: int, steps_per_epoch: int, total: int) -> float:
-    """The learning-rate multiplier at ``step``: linear warm-up over the first epoch, then poly decay to 0."""
-    if step < steps_per_epoch:
-        return WARMUP_START + (1 - WARMUP_START) * step / steps_per_epoch
-    return max(1e-3, (1 - step / total) ** POLY_POWER)

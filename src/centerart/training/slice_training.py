@@ -36,10 +36,10 @@ from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder
 from centerart.training.encoder_data import EncoderViewDataset, collate
 from centerart.training.encoder_metrics import batch_view_metrics, summarize
+from centerart.training.schedules import warmup_factor
 
 FORMAT = "centerart-encoder-train-state"
 VERSION = 1
-WARMUP_START = 0.2  # as the one-run schedule (encoder_module): linear warm-up from 0.2 x lr
 
 
 @dataclass(frozen=True)
@@ -52,8 +52,7 @@ class SliceSchedule:
     scale: float = 1.0
 
     def lr_at(self, step: int) -> float:
-        warm = 1.0 if step >= self.warmup_steps else WARMUP_START + (1 - WARMUP_START) * step / self.warmup_steps
-        return self.lr * self.scale * warm
+        return self.lr * self.scale * warmup_factor(step, self.warmup_steps)
 
 
 @dataclass
