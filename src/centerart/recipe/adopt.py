@@ -57,13 +57,19 @@ def check_training_objects(checkpoint: Path, objects: Path) -> None:
         raise CenterArtError(f"{OPTION} {checkpoint}: not a readable decoder checkpoint ({err})") from None
     if not isinstance(recorded, dict) or not recorded:
         raise CenterArtError(f"{OPTION} {checkpoint}: records no training objects; cannot check it belongs here")
-    here = fingerprint_folders({oid: objects / oid for oid in recorded})
-    differ = sorted(oid for oid, fp in recorded.items() if fp is None or here[oid] != fp)
+    differ = objects_differing(recorded, objects)
     if differ:
         raise CenterArtError(
             f"{OPTION} {checkpoint}: trained on other objects than {objects} holds ({', '.join(differ[:5])}"
             f"{', ...' if len(differ) > 5 else ''}); run the data steps with the source run's options"
         )
+
+
+def objects_differing(recorded: dict[str, str | None], objects: Path) -> list[str]:
+    """The ids of ``recorded`` (id -> content fingerprint) whose folder in ``objects`` has another fingerprint (or
+    none), sorted."""
+    here = fingerprint_folders({oid: Path(objects) / oid for oid in recorded})
+    return sorted(oid for oid, fp in recorded.items() if fp is None or here[oid] != fp)
 
 
 def adopt_decoder(source: Path, record: dict, paths: Paths, changed: list[str]) -> dict:

@@ -193,7 +193,8 @@ def prepare_objects(plan: SlicePlan, work: Path, decoder: Path, workers: int | N
     import torch
 
     from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
-    from centerart.assets.fingerprint import fingerprint_folders
+    from centerart.recipe.adopt import objects_differing
+    from centerart.recipe.steps import link_objects
 
     objects = work / "objects"
     generate_objects(GenerateObjectsConfig(
@@ -202,22 +203,13 @@ def prepare_objects(plan: SlicePlan, work: Path, decoder: Path, workers: int | N
     ))  # fmt: skip
     blob = torch.load(decoder, map_location="cpu", weights_only=True)
     recorded, heldout = dict(blob.get("training_objects") or {}), list(blob["split"]["heldout_objects"])
-    here = fingerprint_folders({oid: objects / oid for oid in recorded})
-    differ = sorted(oid for oid, fp in recorded.items() if fp is None or here[oid] != fp)
+    differ = objects_differing(recorded, objects)
     if not recorded or differ:
         raise CenterArtError(
             f"{decoder}: its training objects are not the plan's objects (seed {plan.objects_seed}, "
             f"{plan.objects_count} per category): {', '.join(differ[:4]) or 'none recorded'}"
         )
-    folders = {}
-    for role, ids in (("train", sorted(recorded)), ("heldout", heldout)):
-        folders[role] = work / "split" / role
-        folders[role].mkdir(parents=True, exist_ok=True)
-        for oid in ids:
-            link = folders[role] / oid
-            if not link.is_symlink():
-                link.symlink_to(Path("..") / ".." / "objects" / oid, target_is_directory=True)
-    return folders
+    return link_objects(work, {"train": sorted(recorded), "heldout": heldout})
 
 
 def render(objects: Path, out: Path, layout: str, count: int, views: int, seed: int, data, decoder, workers):

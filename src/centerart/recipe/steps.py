@@ -208,13 +208,21 @@ def link_split(p: Paths) -> None:
     """``split/train`` and ``split/heldout``: one link per object to its folder in ``objects/`` (scenes of a part of
     the objects are made from a folder holding just that part)."""
     split = _decoder_split(p)
-    for role, ids in (("train", split["train_objects"]), ("heldout", split["heldout_objects"])):
-        folder = p.split / role
-        folder.mkdir(parents=True, exist_ok=True)
+    link_objects(p.out, {"train": split["train_objects"], "heldout": split["heldout_objects"]})
+
+
+def link_objects(root: Path, roles: dict[str, list[str]]) -> dict[str, Path]:
+    """``root/split/<role>/<id>``: a relative link to ``root/objects/<id>`` for each role's ids; returns the role
+    folders."""
+    folders = {}
+    for role, ids in roles.items():
+        folders[role] = Path(root) / "split" / role
+        folders[role].mkdir(parents=True, exist_ok=True)
         for oid in ids:
-            link = folder / oid
+            link = folders[role] / oid
             if not link.is_symlink():
                 link.symlink_to(Path("..") / ".." / "objects" / oid, target_is_directory=True)
+    return folders
 
 
 def run_scenes(cfg: RecipeConfig, p: Paths, planned: dict) -> dict:
