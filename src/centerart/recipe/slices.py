@@ -17,7 +17,6 @@ finished by the next call from ``WORK/slice_k/line.json``), and with ``--commit`
 
 from __future__ import annotations
 
-import os
 import shutil
 import subprocess
 import time
@@ -455,15 +454,14 @@ def _finish_pending(run: Path, lines: list[dict], work_slice: Path) -> bool:
     import json
 
     from centerart.models.checkpoint_files import file_sha256
+    from centerart.utils.atomic import atomic_write_bytes
 
     line = json.loads((work_slice / "line.json").read_text())
     staged = {STATE: work_slice / STATE, "encoder.pt": work_slice / "encoder.pt"}
     if line.get("slice") != len(lines) + 1 or file_sha256(staged[STATE]) != line["state_sha256"]:
         return False
     for name, path in staged.items():
-        tmp = run / f".{name}.tmp{os.getpid()}"
-        shutil.copyfile(path, tmp)
-        os.replace(tmp, run / name)
+        atomic_write_bytes(run / name, path.read_bytes())
     append_line(run, lines, line)
     return True
 
