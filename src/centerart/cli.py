@@ -139,6 +139,11 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "centerart.commands:slices_next",
             "train the encoder one slice further (new scenes, same run, one ledger line); resumable",
         ),
+        "decoder": Command(
+            "centerart.recipe.decoder_slices:DecoderSlicesConfig",
+            "centerart.commands:slices_decoder",
+            "train the SGDF decoder one slice further (same objects, more steps, one ledger line); resumable",
+        ),
         "status": Command(
             "centerart.recipe.slices:SlicesStatusConfig",
             "centerart.commands:slices_status",

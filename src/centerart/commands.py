@@ -204,6 +204,21 @@ def slices_next(cfg) -> None:
         print(f"wrote {cfg.run}/ledger.jsonl, state.pt, encoder.pt; commit them (git add {cfg.run}) to keep them")
 
 
+def slices_decoder(cfg) -> None:
+    from centerart.recipe.decoder_slices import STATUS_COLUMNS, commit_decoder_run, next_decoder_slice
+
+    line = next_decoder_slice(cfg)
+    if "stopped" in line:
+        return
+    v = line["validation"]
+    figures = ", ".join(f"{k} {v[k] * 1000:.2f} mm" for k in STATUS_COLUMNS if k in v)
+    print(f"slice {line['slice']} done: {line['steps']} steps on {line['objects']} objects; validation: {figures}")
+    if cfg.commit:
+        print(commit_decoder_run(cfg.run, line))
+    else:
+        print(f"wrote {cfg.run}/ledger.jsonl, state.pt, decoder.pt; commit them (git add {cfg.run}) to keep them")
+
+
 def slices_status(cfg) -> None:
     from centerart.recipe.slices import status_table
 

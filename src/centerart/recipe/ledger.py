@@ -33,9 +33,24 @@ LINE_FIELDS = {
     "code_version": str,
 }
 
+#: Fields every line of a decoder run's ledger has (:mod:`centerart.recipe.decoder_slices`): its data is fixed by
+#: the plan, so a line records the objects' fingerprint instead of scene seeds and images.
+DECODER_LINE_FIELDS = {
+    "slice": int,
+    "steps": int,
+    "first_step": int,
+    "batch_size": int,
+    "lr_scale": float,
+    "objects_sha256": str,
+    "state_sha256": str,
+    "validation": dict,
+    "code_version": str,
+}
 
-def read_ledger(run: Path) -> list[dict]:
-    """The ledger's lines in order (empty when the run has none yet); a damaged line is one error naming it."""
+
+def read_ledger(run: Path, fields: dict[str, type] = LINE_FIELDS) -> list[dict]:
+    """The ledger's lines in order (empty when the run has none yet); a damaged line (not JSON, a field of
+    ``fields`` missing, a wrong slice number) is one error naming it."""
     path = Path(run) / LEDGER
     if not path.is_file():
         return []
@@ -47,15 +62,15 @@ def read_ledger(run: Path) -> list[dict]:
             line = json.loads(text)
         except json.JSONDecodeError as err:
             raise CenterArtError(f"{path}: line {number} is not JSON ({err.msg})") from None
-        _check_line(line, path, number, expected_slice=len(lines) + 1)
+        _check_line(line, path, number, len(lines) + 1, fields)
         lines.append(line)
     return lines
 
 
-def _check_line(line, path: Path, number: int, expected_slice: int) -> None:
+def _check_line(line, path: Path, number: int, expected_slice: int, fields: dict[str, type]) -> None:
     if not isinstance(line, dict):
         raise CenterArtError(f"{path}: line {number} is not a ledger record")
-    for name, kind in LINE_FIELDS.items():
+    for name, kind in fields.items():
         value = line.get(name)
         ok = isinstance(value, kind) or (kind is float and isinstance(value, int) and not isinstance(value, bool))
         if not ok:

@@ -115,6 +115,18 @@ def load_plan(run: Path) -> SlicePlan | None:
         raise CenterArtError(f"{path}: damaged run plan ({err})") from None
 
 
+def run_kind(run: Path) -> str:
+    """``"decoder"`` for a decoder run (:mod:`centerart.recipe.decoder_slices`), else ``"encoder"``."""
+    import json
+
+    path = Path(run) / "run.json"
+    try:
+        kind = json.loads(path.read_text()).get("kind", "encoder") if path.is_file() else "encoder"
+    except (json.JSONDecodeError, AttributeError) as err:
+        raise CenterArtError(f"{path}: damaged run plan ({err})") from None
+    return "decoder" if kind == "decoder" else "encoder"
+
+
 def create_plan(run: Path, preset: str, init: Path | None, seed_block: int = 0) -> SlicePlan:
     """A new run's plan from ``preset``, its decoder pinned by SHA-256, written to ``RUN/run.json``."""
     from centerart.models.checkpoint_files import file_sha256
@@ -357,7 +369,7 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
     lines = read_ledger(run)
     k = len(lines) + 1
     work_slice = work / f"slice_{k:03d}"
-    if (work_slice / "line.json").is_file() and _finish_pending(run, lines, work_slice):
+    if (work_slice / "line.json").is_file() and finish_pending(run, lines, work_slice):
         echo(f"slice {k}: its files were written by an interrupted call; ledger line added")
         return read_ledger(run)[-1]
     check_run_files(run, lines)
@@ -418,7 +430,7 @@ def _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder,
     _export_encoder(work_slice / "encoder.pt", state, plan, decoder, codes, line)
     line["encoder_sha256"] = file_sha256(work_slice / "encoder.pt")
     atomic_write_json(work_slice / "line.json", line)
-    _finish_pending(run, lines, work_slice)
+    finish_pending(run, lines, work_slice)
     return line
 
 
@@ -448,7 +460,7 @@ def _export_encoder(path: Path, state, plan: SlicePlan, decoder: Path, codes: di
     save_encoder(path, state.encoder, decoder, sorted(codes), train_config, metrics, dict(recorded))
 
 
-def _finish_pending(run: Path, lines: list[dict], work_slice: Path) -> bool:
+def finish_pending(run: Path, lines: list[dict], work_slice: Path, export: str = "encoder.pt") -> bool:
     """Copy a finished slice's files from WORK into RUN, then append its line (last: the line is the commit
     point). False when the staged files are not the next slice's (then nothing is touched)."""
     import json
@@ -457,7 +469,7 @@ def _finish_pending(run: Path, lines: list[dict], work_slice: Path) -> bool:
     from centerart.utils.atomic import atomic_write_bytes
 
     line = json.loads((work_slice / "line.json").read_text())
-    staged = {STATE: work_slice / STATE, "encoder.pt": work_slice / "encoder.pt"}
+    staged = {STATE: work_slice / STATE, export: work_slice / export}
     if line.get("slice") != len(lines) + 1 or file_sha256(staged[STATE]) != line["state_sha256"]:
         return False
     for name, path in staged.items():
@@ -467,10 +479,15 @@ def _finish_pending(run: Path, lines: list[dict], work_slice: Path) -> bool:
 
 
 def commit_run(run: Path, line: dict) -> str:
-    """``git commit`` of the run folder with a message naming the slice; returns git's one-line summary."""
+    """``git commit`` of an encoder run's folder with a message naming the slice; returns git's one-line summary."""
+    message = (f"slices: {Path(run).resolve().name} slice {line['slice']} ({line['steps']} steps, {line['images']} "
+               f"new images; val recall {line['validation'].get('recall', float('nan')):.3f})")  # fmt: skip
+    return commit_folder(run, message)
+
+
+def commit_folder(run: Path, message: str) -> str:
+    """``git add`` and ``git commit`` of the run folder alone; returns git's one-line summary."""
     run = Path(run).resolve()
-    message = (f"slices: {run.name} slice {line['slice']} ({line['steps']} steps, {line['images']} new images; "
-               f"val recall {line['validation'].get('recall', float('nan')):.3f})")  # fmt: skip
     try:
         subprocess.run(["git", "-C", str(run), "add", "--", "."], check=True, capture_output=True, text=True)
         done = subprocess.run(["git", "-C", str(run), "commit", "-m", message, "--", "."], check=True,
@@ -487,7 +504,11 @@ STATUS_COLUMNS = ("recall", "precision", "translation_cm_median", "rotation_deg_
 
 
 def status_table(run: Path) -> str:
-    """The plan in one line and one row per ledger line (markdown)."""
+    """The plan in one line and one row per ledger line (markdown); an encoder or a decoder run."""
+    if run_kind(run) == "decoder":
+        from centerart.recipe.decoder_slices import decoder_status_table
+
+        return decoder_status_table(run)
     plan = load_plan(run)
     if plan is None:
         raise CenterArtError(f"{run}: no run.json (not a sliced run; `centerart slices next --run {run}` makes one)")
@@ -515,6 +536,12 @@ def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
     from centerart.training.slice_training import load_state, new_state
 
     run, work = Path(cfg.run), Path(cfg.work)
+    if run_kind(run) == "decoder":
+        from centerart.recipe.decoder_slices import replay_decoder
+
+        if cfg.threads > 0:
+            torch.set_num_threads(cfg.threads)
+        return replay_decoder(run, work, cfg.workers, cfg.tolerance, cfg.progress, echo)
     plan = load_plan(run)
     if plan is None:
         raise CenterArtError(f"{run}: no run.json (not a sliced run)")

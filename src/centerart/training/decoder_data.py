@@ -109,10 +109,14 @@ class PointBatchDataset(Dataset):
         return self.length
 
     def __getitem__(self, i: int) -> dict[str, torch.Tensor]:
+        return self.item(i)
+
+    def item(self, i: int, generator: torch.Generator | None = None) -> dict[str, torch.Tensor]:
+        """Item ``i`` with its points drawn from ``generator`` (default: the global torch RNG)."""
         i = i % len(self.states)
         s = self.states[i]
         pts, sdf, gp, gd = self._tensors[i]
-        idx = torch.randint(0, len(pts), (self.points_per_item,))
+        idx = torch.randint(0, len(pts), (self.points_per_item,), generator=generator)
         return {
             "code_index": torch.tensor(self.code_index[s.object_id]),
             "joint": torch.tensor(s.joint, dtype=torch.float32),

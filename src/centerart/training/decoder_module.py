@@ -94,12 +94,16 @@ class DecoderModule(L.LightningModule):
         return terms
 
     # ------------------------------------------------------------------ training
-    def training_step(self, batch, batch_idx):
+    def loss_terms(self, batch) -> dict[str, torch.Tensor]:
+        """The training loss and its terms on one batch (``decoder_loss``; ``loss`` is what is minimised)."""
         f = self._flat(batch)
         out = self.decoder(f["code"], f["joint"], f["xyz"])
-        terms = decoder_loss(
+        return decoder_loss(
             self.loss_config, out, f["xyz"], f["sdf"], f["grasp_points"], f["grasp_distance"], f["batch_codes"]
         )
+
+    def training_step(self, batch, batch_idx):
+        terms = self.loss_terms(batch)
         bs = len(batch["points"])
         self.log("train/loss", terms["loss"], prog_bar=True, batch_size=bs)
         self.log("train/sdf", terms["sdf"], prog_bar=True, batch_size=bs)

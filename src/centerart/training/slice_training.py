@@ -51,8 +51,12 @@ class SliceSchedule:
     warmup_steps: int = 500
     scale: float = 1.0
 
+    def factor_at(self, step: int) -> float:
+        """The multiplier of the base rate at global ``step`` (warm-up times the slice's scale)."""
+        return self.scale * warmup_factor(step, self.warmup_steps)
+
     def lr_at(self, step: int) -> float:
-        return self.lr * self.scale * warmup_factor(step, self.warmup_steps)
+        return self.lr * self.factor_at(step)
 
 
 @dataclass

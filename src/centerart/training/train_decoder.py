@@ -136,21 +136,15 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
     """
     import lightning as L
 
-    from centerart.training.decoder_module import DecoderModule
-
     if not Path(cfg.data).is_dir():
         raise CenterArtError(f"{cfg.data}: SDF data folder not found")
     out = check_output_folder(cfg.out)
     if cfg.threads > 0:
         torch.set_num_threads(cfg.threads)
     L.seed_everything(cfg.seed, workers=True, verbose=False)
-    data = _load_data(cfg)
+    data = load_split_data(cfg)
     dcfg, lcfg = cfg.decoder_config(), cfg.loss_config()
-    module = DecoderModule(
-        dcfg, lcfg, data.split.train_objects, cfg.lr_decoder, cfg.lr_codes, cfg.epochs,
-        heldout_object_states=data.heldout_objects,
-        code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, code_weight=cfg.code_weight, seed=cfg.seed),
-    )  # fmt: skip
+    module = build_module(cfg, data)
     last = resume_checkpoint(out, cfg.resume, module)
     out.mkdir(parents=True, exist_ok=True)
     # Processes a launcher started besides rank 0 (strategy ddp) train into the same OUT without its lock.
@@ -168,7 +162,18 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
         return _export(cfg, out, module, data, lcfg, metrics)
 
 
-def _load_data(cfg: TrainDecoderConfig) -> _Data:
+def build_module(cfg: TrainDecoderConfig, data: _Data):
+    """The Lightning module of ``cfg`` over ``data``'s training objects (weights drawn from the torch RNG)."""
+    from centerart.training.decoder_module import DecoderModule
+
+    return DecoderModule(
+        cfg.decoder_config(), cfg.loss_config(), data.split.train_objects, cfg.lr_decoder, cfg.lr_codes, cfg.epochs,
+        heldout_object_states=data.heldout_objects,
+        code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, code_weight=cfg.code_weight, seed=cfg.seed),
+    )  # fmt: skip
+
+
+def load_split_data(cfg: TrainDecoderConfig) -> _Data:
     """Load every state (points subsampled) and split them into training, held-out states and held-out objects."""
     from centerart.sdf.samples import load_states
     from centerart.training.decoder_data import make_split, surface_bounds
@@ -286,19 +291,25 @@ def training_object_fingerprints(data: Path, object_ids: list[str]) -> dict[str,
 
 def _export(cfg: TrainDecoderConfig, out: Path, module, data: _Data, lcfg: LossConfig, metrics: dict) -> dict:
     """Write ``decoder.pt`` (CPU weights, codes, bounds, split, config, metrics) and ``metrics.json``."""
+    path = export_decoder(out / "decoder.pt", cfg, module, data, {**asdict(cfg), "loss": asdict(lcfg)}, metrics)
+    atomic_write_json(out / "metrics.json", metrics)
+    return {"checkpoint": path, "metrics": metrics, "split": data.split}
+
+
+def export_decoder(path: Path, cfg: TrainDecoderConfig, module, data: _Data, train_config: dict, metrics: dict):
+    """The decoder checkpoint (models/checkpoint.py format) of ``module`` at ``path``, naming its training objects
+    by fingerprint (found through ``cfg.data``'s manifest)."""
     from centerart.models.checkpoint import save_checkpoint
 
     module.decoder.cpu()
-    path = save_checkpoint(
-        out / "decoder.pt",
+    return save_checkpoint(
+        path,
         module.decoder,
         data.split.train_objects,
         module.code_array(),
         data.bounds,
         data.split.to_dict(),
-        json.loads(json.dumps({**asdict(cfg), "loss": asdict(lcfg)}, default=str)),
+        json.loads(json.dumps(train_config, default=str)),
         metrics,
         training_objects=training_object_fingerprints(Path(cfg.data), data.split.train_objects),
     )
-    atomic_write_json(out / "metrics.json", metrics)
-    return {"checkpoint": path, "metrics": metrics, "split": data.split}
