@@ -75,6 +75,22 @@ def test_command_line_starts_from_the_named_preset_and_overrides_any_step():
         parse("--preset", "tiny")  # --out is required
 
 
+def test_cheap_training_views_change_the_training_sets_only(tmp_path):
+    import json
+
+    from centerart.recipe.steps import Paths, plan_scenes
+
+    cfg = recipe_preset("small", out=tmp_path)
+    cfg.scenes.train_intrinsics, cfg.scenes.train_depth = "d415-half", "stereo-model"
+    (tmp_path / "decoder").mkdir()
+    split = {"train_objects": ["a"], "heldout_objects": ["b"], "heldout_states": {}}
+    (tmp_path / "decoder" / "split.json").write_text(json.dumps(split))
+    planned = plan_scenes(cfg, Paths(tmp_path))
+    made = {name: (c.intrinsics, c.depth) for name, c in planned.items()}
+    assert made["train_kitchen"] == made["train_single"] == ("d415-half", "stereo-model")
+    assert made["val_single"] == made["test_kitchen"] == ("d415", "stereo")
+
+
 def test_changed_settings_and_equal_seeds_are_refused(tiny_run, capsys):
     args = ["recipe", "--preset", "tiny", "--out", str(tiny_run), "--until", "grasps", "--grasps.per-state", "5"]
     assert main(args) == 2

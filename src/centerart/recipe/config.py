@@ -80,6 +80,13 @@ class ScenesStep:
 
     intrinsics: Literal["d415", "paper", "tiny"] = "d415"
     depth: Literal["true", "stereo", "analytic"] = "stereo"
+    train_intrinsics: Literal["d415", "d415-half", "paper", "tiny"] | None = None
+    """Camera of the training sets (default: ``intrinsics``). ``d415-half`` renders at the small encoder's input
+    size (320x240), with ``train_depth stereo-model`` about 10x faster per view (``centerart slices``' cheap data);
+    validation and test sets keep ``intrinsics`` and ``depth``."""
+    train_depth: Literal["true", "stereo", "stereo-model", "analytic"] | None = None
+    """Realistic depth of the training sets (default: ``depth``). ``stereo-model``: the full-size stereo sensor's
+    measured errors drawn from the true depth, at any size (docs/scenes.md)."""
     train_kitchen: int = 139
     train_single: int = 120
     val_kitchen: int = 15
