@@ -188,35 +188,32 @@ def view(cfg) -> None:
 
 
 def slices_next(cfg) -> None:
-    from centerart.recipe.slices import commit_run, next_slice
+    from centerart.recipe.slices import STATUS_COLUMNS, commit_run, next_slice
 
     line = next_slice(cfg)
-    if "stopped" in line:
-        return
-    from centerart.recipe.slices import STATUS_COLUMNS
-
-    v = line["validation"]
-    figures = ", ".join(f"{k} {v[k]:.3f}" for k in STATUS_COLUMNS if k in v)
-    print(f"slice {line['slice']} done: {line['steps']} steps, {line['images']} new images; validation: {figures}")
-    if cfg.commit:
-        print(commit_run(cfg.run, line))
-    else:
-        print(f"wrote {cfg.run}/ledger.jsonl, state.pt, encoder.pt; commit them (git add {cfg.run}) to keep them")
+    if "stopped" not in line:
+        v = line["validation"]
+        figures = ", ".join(f"{k} {v[k]:.3f}" for k in STATUS_COLUMNS if k in v)
+        _slice_done(cfg, line, f"{line['images']} new images; validation: {figures}", commit_run, "encoder.pt")
 
 
 def slices_decoder(cfg) -> None:
     from centerart.recipe.decoder_slices import STATUS_COLUMNS, commit_decoder_run, next_decoder_slice
 
     line = next_decoder_slice(cfg)
-    if "stopped" in line:
-        return
-    v = line["validation"]
-    figures = ", ".join(f"{k} {v[k] * 1000:.2f} mm" for k in STATUS_COLUMNS if k in v)
-    print(f"slice {line['slice']} done: {line['steps']} steps on {line['objects']} objects; validation: {figures}")
+    if "stopped" not in line:
+        v = line["validation"]
+        figures = ", ".join(f"{k} {v[k] * 1000:.2f} mm" for k in STATUS_COLUMNS if k in v)
+        _slice_done(cfg, line, f"{line['objects']} objects; validation: {figures}", commit_decoder_run, "decoder.pt")
+
+
+def _slice_done(cfg, line: dict, summary: str, commit, export: str) -> None:
+    """Print a finished slice's line, then commit the run folder (``--commit``) or say what to commit."""
+    print(f"slice {line['slice']} done: {line['steps']} steps, {summary}")
     if cfg.commit:
-        print(commit_decoder_run(cfg.run, line))
+        print(commit(cfg.run, line))
     else:
-        print(f"wrote {cfg.run}/ledger.jsonl, state.pt, decoder.pt; commit them (git add {cfg.run}) to keep them")
+        print(f"wrote {cfg.run}/ledger.jsonl, state.pt, {export}; commit them (git add {cfg.run}) to keep them")
 
 
 def slices_status(cfg) -> None:

@@ -389,6 +389,7 @@ def decoder_status_table(run: Path) -> str:
 
 def replay_decoder(run_dir: Path, work: Path, workers: int | None, tolerance: float, progress: bool, echo) -> dict:
     """Remake the run's state from its plan and ledger (same data, same steps) and compare the weights."""
+    from centerart.recipe.slices import compare_replay
     from centerart.training.decoder_slice_training import run_decoder_steps
 
     plan = load_decoder_plan(run_dir)
@@ -403,10 +404,4 @@ def replay_decoder(run_dir: Path, work: Path, workers: int | None, tolerance: fl
         run_decoder_steps(state, run.batches, run.schedule(line["lr_scale"]), line["first_step"] + line["steps"])
         echo(f"slice {line['slice']}: replayed {line['steps']} steps")
     saved = run.load(target)
-    pairs = zip(state.module.state_dict().values(), saved.module.state_dict().values(), strict=True)
-    diff = max(float((a - b).abs().max()) for a, b in pairs)
-    result = {"slices": len(lines), "steps": state.step, "max_abs_weight_diff": diff, "tolerance": tolerance}
-    if state.step != saved.step or diff > tolerance:
-        raise CenterArtError(f"replay of {run_dir} differs from its state.pt: steps {state.step} vs {saved.step}, "
-                             f"largest weight difference {diff:.3g} (tolerance {tolerance:g})")  # fmt: skip
-    return result
+    return compare_replay(run_dir, len(lines), (state.step, state.module), (saved.step, saved.module), tolerance)

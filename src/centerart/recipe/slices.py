@@ -563,10 +563,15 @@ def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
         train_on(state, views, codes, plan, line, 0, {"workers": 0, "progress": cfg.progress})
         echo(f"slice {line['slice']}: replayed {line['steps']} steps")
     saved = load_state(target, state.encoder.config)
-    pairs = zip(state.encoder.state_dict().values(), saved.encoder.state_dict().values(), strict=True)
+    return compare_replay(run, len(lines), (state.step, state.encoder), (saved.step, saved.encoder), cfg.tolerance)
+
+
+def compare_replay(run: Path, slices: int, replayed: tuple, saved: tuple, tolerance: float) -> dict:
+    """The replay's summary when ``replayed`` (step, module) equals ``saved`` (the committed state) in step and
+    within ``tolerance`` in every weight; else one error line."""
+    pairs = zip(replayed[1].state_dict().values(), saved[1].state_dict().values(), strict=True)
     diff = max(float((a - b).abs().max()) for a, b in pairs)
-    result = {"slices": len(lines), "steps": state.step, "max_abs_weight_diff": diff, "tolerance": cfg.tolerance}
-    if state.step != saved.step or diff > cfg.tolerance:
-        raise CenterArtError(f"replay of {run} differs from its state.pt: steps {state.step} vs {saved.step}, "
-                             f"largest weight difference {diff:.3g} (tolerance {cfg.tolerance:g})")  # fmt: skip
-    return result
+    if replayed[0] != saved[0] or diff > tolerance:
+        raise CenterArtError(f"replay of {run} differs from its state.pt: steps {replayed[0]} vs {saved[0]}, "
+                             f"largest weight difference {diff:.3g} (tolerance {tolerance:g})")  # fmt: skip
+    return {"slices": slices, "steps": replayed[0], "max_abs_weight_diff": diff, "tolerance": tolerance}

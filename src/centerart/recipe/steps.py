@@ -198,7 +198,8 @@ def plan_scenes(cfg: RecipeConfig, p: Paths) -> dict[str, Any]:
             views_per_scene=s.kitchen_views if ss.layout == "kitchen" else s.single_views,
             seed=(cfg.test_seed if ss.role == "test" else cfg.seed) + ss.seed_offset,
             depth=(s.train_depth or s.depth) if ss.role == "train" else s.depth,
-            intrinsics=(s.train_intrinsics or s.intrinsics) if ss.role == "train" else s.intrinsics, save_ir=s.save_ir, ir_shading=s.ir_shading, workers=cfg.workers,
+            intrinsics=(s.train_intrinsics or s.intrinsics) if ss.role == "train" else s.intrinsics,
+            save_ir=s.save_ir, ir_shading=s.ir_shading, workers=cfg.workers,
             ray_address=cfg.ray_address,
             decoder_checkpoint=p.decoder / "decoder.pt" if ss.role == "train" else None,
         )  # fmt: skip
