@@ -25,6 +25,7 @@ from typing import Literal
 
 from centerart.errors import CenterArtError
 from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, check_run_files, read_ledger
+from centerart.recipe.slices import commit_folder, compare_replay, finish_pending, load_plan
 from centerart.utils.checks import at_least, positive
 
 EXPORT = "decoder.pt"
@@ -135,16 +136,6 @@ class DecoderSlicesConfig:
 
 
 # ---------------------------------------------------------------------------- plan and data
-def load_decoder_plan(run: Path) -> DecoderSlicePlan | None:
-    path = Path(run) / "run.json"
-    if not path.is_file():
-        return None
-    try:
-        return DecoderSlicePlan.from_dict(json.loads(path.read_text()))
-    except json.JSONDecodeError as err:
-        raise CenterArtError(f"{path}: damaged run plan ({err})") from None
-
-
 def create_decoder_plan(run: Path, preset: str) -> DecoderSlicePlan:
     from centerart.utils.atomic import atomic_write_json
 
@@ -286,11 +277,10 @@ def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
     dict ``{"stopped": step, "of": steps}`` when the slice stopped early."""
     import torch
 
-    from centerart.recipe.slices import finish_pending
     from centerart.utils.atomic import atomic_write_json
 
     run_dir, work = Path(cfg.run), Path(cfg.work)
-    plan = load_decoder_plan(run_dir) or create_decoder_plan(run_dir, cfg.preset)
+    plan = load_plan(run_dir, DecoderSlicePlan) or create_decoder_plan(run_dir, cfg.preset)
     lines = read_ledger(run_dir, DECODER_LINE_FIELDS)
     k = len(lines) + 1
     work_slice = work / f"slice_{k:03d}"
@@ -328,7 +318,6 @@ def _finish_slice(run: _Run, run_dir: Path, lines: list[dict], work_slice: Path,
     import torch
 
     from centerart.models.checkpoint_files import file_sha256
-    from centerart.recipe.slices import finish_pending
     from centerart.training.decoder_slice_training import save_decoder_state
     from centerart.training.train_decoder import export_decoder
     from centerart.utils.atomic import atomic_write_json
@@ -355,8 +344,6 @@ def _finish_slice(run: _Run, run_dir: Path, lines: list[dict], work_slice: Path,
 
 
 def commit_decoder_run(run: Path, line: dict) -> str:
-    from centerart.recipe.slices import commit_folder
-
     sdf = line["validation"].get("val_object/sdf_near", float("nan")) * 1000
     message = (f"slices: {Path(run).resolve().name} slice {line['slice']} ({line['steps']} decoder steps; held-out "
                f"objects' SDF error near the surface {sdf:.2f} mm)")  # fmt: skip
@@ -370,7 +357,7 @@ STATUS_COLUMNS = ("val_object/sdf", "val_object/sdf_near", "val_object/grasp_nea
 
 
 def decoder_status_table(run: Path) -> str:
-    plan = load_decoder_plan(run)
+    plan = load_plan(run, DecoderSlicePlan)
     lines = read_ledger(run, DECODER_LINE_FIELDS)
     check_run_files(run, lines)
     head = (f"{run}: decoder run, preset {plan.preset}, decoder {plan.decoder_preset}, {plan.objects_count} objects "
@@ -389,10 +376,9 @@ def decoder_status_table(run: Path) -> str:
 
 def replay_decoder(run_dir: Path, work: Path, workers: int | None, tolerance: float, progress: bool, echo) -> dict:
     """Remake the run's state from its plan and ledger (same data, same steps) and compare the weights."""
-    from centerart.recipe.slices import compare_replay
     from centerart.training.decoder_slice_training import run_decoder_steps
 
-    plan = load_decoder_plan(run_dir)
+    plan = load_plan(run_dir, DecoderSlicePlan)
     lines = read_ledger(run_dir, DECODER_LINE_FIELDS)
     target = check_run_files(run_dir, lines)
     if target is None:

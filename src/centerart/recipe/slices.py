@@ -103,14 +103,16 @@ class SlicesReplayConfig:
 
 
 # ---------------------------------------------------------------------------- the run's plan and decoder
-def load_plan(run: Path) -> SlicePlan | None:
+def load_plan(run: Path, plan_class=SlicePlan):
+    """``RUN/run.json`` as a ``plan_class`` (the encoder's :class:`SlicePlan`, or a decoder run's plan); None
+    before the run's first call."""
     import json
 
     path = Path(run) / "run.json"
     if not path.is_file():
         return None
     try:
-        return SlicePlan.from_dict(json.loads(path.read_text()))
+        return plan_class.from_dict(json.loads(path.read_text()))
     except (json.JSONDecodeError, AttributeError) as err:
         raise CenterArtError(f"{path}: damaged run plan ({err})") from None
 
