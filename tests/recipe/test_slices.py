@@ -12,6 +12,7 @@ import pytest
 import torch
 
 from centerart.cli import main
+from centerart.errors import CenterArtError
 from centerart.models.checkpoint_files import file_sha256
 from centerart.models.encoder.checkpoint import load_encoder
 from centerart.models.encoder.config import PRESETS
@@ -138,3 +139,27 @@ def test_a_run_started_from_a_sliced_runs_encoder_takes_another_seed_block(tmp_p
     assert set(slice_seeds(1, 1).values()).isdisjoint(
         slice_seeds(k, 0)[s] for k in range(1, 999) for s in ("kitchen", "single")
     )
+
+
+def test_a_run_against_another_decoder_keeps_a_copy_and_warm_starts_from_an_encoder_of_the_old_one(tmp_path, capsys):
+    """--decoder: the plan pins a copy in the run folder and takes its objects per category; an --init trained
+    against other codes loads as a warm start only then (without --decoder it is refused, as before)."""
+    from centerart.models.checkpoint import default_checkpoint, load_shape_codes
+    from centerart.models.encoder.checkpoint import default_encoder
+    from centerart.recipe.slices import create_plan, encoder_config, initial_state
+
+    blob = torch.load(default_checkpoint(), map_location="cpu", weights_only=True)
+    other = tmp_path / "other_decoder.pt"
+    torch.save({**blob, "metrics": {"note": 1.0}}, other)  # the same objects and codes, another file
+    plan = create_plan(tmp_path / "run", "small", default_encoder(), seed_block=1, decoder=other)
+    assert plan.objects_count == 8 and plan.init_other_decoder
+    assert file_sha256(tmp_path / "run" / "decoder.pt") == plan.decoder_sha256 == file_sha256(other)
+    config = encoder_config(plan, load_shape_codes(other))
+    assert initial_state(plan, config).step == 0
+    plan.init_other_decoder = False  # what a run without --decoder checks: the init's decoder must be the run's
+    with pytest.raises(CenterArtError, match="trained against the shape codes"):
+        initial_state(plan, config)
+    same = create_plan(tmp_path / "run2", "small", default_encoder(), seed_block=1, decoder=default_checkpoint())
+    assert not same.init_other_decoder
+    _one_error_line(capsys, ["slices", "next", "--run", str(tmp_path / "run3"), "--work", str(tmp_path / "w"),
+                             "--decoder", str(default_encoder()), *COMMON], "not a decoder checkpoint")  # fmt: skip

@@ -82,6 +82,9 @@ class SlicePlan:
     init: str | None = None
     """Encoder checkpoint the run starts from (None: weights drawn from ``seed``)."""
     init_sha256: str = ""
+    init_other_decoder: bool = False
+    """True when ``init`` was trained against another decoder's codes (a run made with ``--decoder``): its shape
+    head is then only a warm start, and nothing checks it against this run's decoder."""
     batch_size: int = 8
     lr: float = 1e-3
     warmup_steps: int = 500

@@ -20,6 +20,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 import time
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -47,6 +48,11 @@ class SlicesNextConfig:
     seed_block: int = 0
     """Scene-seed block of a new run (ignored once the run exists); an --init made by a sliced run needs
     another block than that run's, so that no slice repeats the scenes its start was trained on."""
+    decoder: Path | None = None
+    """A new run trains against this decoder checkpoint (e.g. a decoder run's ``decoder.pt``), copied into
+    ``RUN/decoder.pt``, instead of the preset's (the shipped ``sgdf_small.pt``); the objects per category follow
+    from its training and held-out objects. An --init trained against another decoder is then a warm start
+    (ignored once the run exists)."""
     steps: int | None = None
     """Optimizer steps of this slice (default: the plan's)."""
     kitchen: int | None = None
@@ -129,29 +135,69 @@ def run_kind(run: Path) -> str:
     return "decoder" if kind == "decoder" else "encoder"
 
 
-def create_plan(run: Path, preset: str, init: Path | None, seed_block: int = 0) -> SlicePlan:
-    """A new run's plan from ``preset``, its decoder pinned by SHA-256, written to ``RUN/run.json``."""
+def create_plan(
+    run: Path, preset: str, init: Path | None, seed_block: int = 0, decoder: Path | None = None
+) -> SlicePlan:
+    """A new run's plan from ``preset`` (its decoder replaced by a copy of ``decoder`` when given), the decoder
+    pinned by SHA-256, written to ``RUN/run.json``."""
     from centerart.models.checkpoint_files import file_sha256
     from centerart.models.encoder.config import preset as encoder_preset
     from centerart.utils.atomic import atomic_write_json
 
     plan = plan_preset(preset)
     plan.encoder = encoder_preset(plan.encoder_preset).to_dict()  # today's defaults, kept for every slice
-    decoder = _repo_path(plan.decoder)
-    if not decoder.is_file():
-        raise CenterArtError(f"{decoder}: the plan's decoder checkpoint is missing")
-    plan.decoder_sha256 = file_sha256(decoder)
+    if decoder is not None:
+        plan.objects_count = decoder_objects_per_category(Path(decoder))
+        # A copy in the run folder, as for --init: a decoder run rewrites its decoder.pt at every slice.
+        plan.decoder = _copy_into_run(Path(decoder), Path(run) / "decoder.pt")
+    path = _repo_path(plan.decoder)
+    if not path.is_file():
+        raise CenterArtError(f"{path}: the plan's decoder checkpoint is missing")
+    plan.decoder_sha256 = file_sha256(path)
     plan.seed_block = seed_block
     if init is not None:
         if not Path(init).is_file():
             raise CenterArtError(f"--init {init}: no such encoder checkpoint")
         _check_seed_block(Path(init), seed_block)
+        plan.init_other_decoder = decoder is not None and _trained_against(Path(init)) != plan.decoder_sha256
         # A copy in the run folder: the file it came from (the shipped encoder) may be replaced by this very run.
-        Path(run).mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(init, Path(run) / "init.pt")
-        plan.init, plan.init_sha256 = _plan_path(Path(run) / "init.pt"), file_sha256(init)
+        plan.init, plan.init_sha256 = _copy_into_run(Path(init), Path(run) / "init.pt"), file_sha256(init)
     atomic_write_json(Path(run) / "run.json", plan.to_dict())
     return plan
+
+
+def _copy_into_run(source: Path, target: Path) -> str:
+    """Copy ``source`` to ``target`` (in the run folder); returns how the plan names the copy."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(source, target)
+    return _plan_path(target)
+
+
+def _trained_against(encoder: Path) -> str | None:
+    """SHA-256 of the decoder an encoder checkpoint was trained against (None when it does not say)."""
+    import torch
+
+    blob = torch.load(encoder, map_location="cpu", weights_only=True)
+    return (blob.get("decoder") or {}).get("sha256") if isinstance(blob, dict) else None
+
+
+def decoder_objects_per_category(decoder: Path) -> int:
+    """Objects per category the decoder's training and held-out objects were drawn from (``category_NNNN``
+    names, the first N per category of one seed, as every recipe and decoder run makes them)."""
+    import torch
+
+    if not decoder.is_file():
+        raise CenterArtError(f"--decoder {decoder}: no such decoder checkpoint")
+    try:
+        blob = torch.load(decoder, map_location="cpu", weights_only=True)
+        names = list(blob["training_objects"]) + list(blob["split"]["heldout_objects"])
+        counts = Counter(name.rsplit("_", 1)[0] for name in names)
+        indices = [int(name.rsplit("_", 1)[1]) for name in names]
+    except Exception as err:  # any unreadable or foreign file: one line naming it
+        raise CenterArtError(f"--decoder {decoder}: not a decoder checkpoint with its objects ({err})") from None
+    if max(indices) + 1 != max(counts.values()):
+        raise CenterArtError(f"--decoder {decoder}: its objects are not the first N of each category")
+    return max(counts.values())
 
 
 def _check_seed_block(init: Path, seed_block: int) -> None:
@@ -301,7 +347,7 @@ def encoder_config(plan: SlicePlan, codes: dict):
 
 def start_state(plan: SlicePlan, run: Path, lines: list[dict], work_slice: Path, config):
     """The state slice k starts (or resumes) from, and the slice step it is at."""
-    from centerart.training.slice_training import load_state, new_state
+    from centerart.training.slice_training import load_state
 
     start_sha = lines[-1]["state_sha256"] if lines else "init"
     progress = work_slice / "progress.pt"
@@ -309,12 +355,18 @@ def start_state(plan: SlicePlan, run: Path, lines: list[dict], work_slice: Path,
         state = load_state(progress, config)
         if state.meta.get("start_sha") == start_sha:
             return state, int(state.meta["slice_step"])
-    if lines:
-        state = load_state(run / STATE, config)
-    else:
-        state = new_state(config, plan.seed, checked_init(plan), checked_decoder(plan))
+    state = load_state(run / STATE, config) if lines else initial_state(plan, config)
     state.meta = {"start_sha": start_sha, "slice_step": 0}
     return state, 0
+
+
+def initial_state(plan: SlicePlan, config):
+    """The state a run's first slice starts from: random weights, or its --init (checked against the run's
+    decoder unless the plan says the init was trained against another one)."""
+    from centerart.training.slice_training import new_state
+
+    decoder = None if plan.init_other_decoder else checked_decoder(plan)
+    return new_state(config, plan.seed, checked_init(plan), decoder)
 
 
 def train_on(state, views, codes, plan: SlicePlan, settings: dict, start: int, options: dict):
@@ -367,7 +419,7 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
     from centerart.utils.atomic import atomic_write_json
 
     run, work = Path(cfg.run), Path(cfg.work)
-    plan = load_plan(run) or create_plan(run, cfg.preset, cfg.init, cfg.seed_block)
+    plan = load_plan(run) or create_plan(run, cfg.preset, cfg.init, cfg.seed_block, cfg.decoder)
     lines = read_ledger(run)
     k = len(lines) + 1
     work_slice = work / f"slice_{k:03d}"
@@ -535,7 +587,7 @@ def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
     import torch
 
     from centerart.models.checkpoint import load_shape_codes
-    from centerart.training.slice_training import load_state, new_state
+    from centerart.training.slice_training import load_state
 
     run, work = Path(cfg.run), Path(cfg.work)
     if run_kind(run) == "decoder":
@@ -556,7 +608,7 @@ def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
     decoder = checked_decoder(plan)
     folders = prepare_objects(plan, work, decoder, cfg.workers)
     codes = load_shape_codes(decoder)
-    state = new_state(encoder_config(plan, codes), plan.seed, checked_init(plan), decoder)
+    state = initial_state(plan, encoder_config(plan, codes))
     for line in lines:
         views = slice_views(folders, work / f"slice_{line['slice']:03d}", SliceData(**line["data"]), line["seeds"],
                             decoder, cfg.workers)  # fmt: skip
