@@ -71,3 +71,21 @@ def test_bad_decoder_runs_are_one_error_line(tiny_decoder_run, tmp_path, capsys)
     _one_error_line(capsys, ["slices", "decoder", *args], "not the objects slice 1 trained on")
     (run / "state.pt").write_bytes(b"damaged")
     _one_error_line(capsys, ["slices", "decoder", *args], "state.pt")
+
+
+@pytest.mark.slow  # ~10 s: two more tiny slices on the run above's data
+def test_a_decoder_run_with_the_papers_dropout_and_weight_norm_keeps_them(tiny_decoder_run, tmp_path, capsys):
+    work, run = tmp_path / "work", tmp_path / "run"
+    work.mkdir()
+    for name in ("objects", "grasps", "sdf"):  # the same objects, labels and samples as the run above
+        (work / name).symlink_to(tiny_decoder_run[1] / name)
+    args = ["slices", "decoder", "--run", str(run), "--work", str(work), "--preset", "tiny", *COMMON]
+    assert main([*args, "--dropout", "0.2", "--weight-norm", "True"]) == 0
+    plan = json.loads((run / "run.json").read_text())
+    assert plan["decoder_overrides"] == {"dropout": 0.2, "weight_norm": True}
+    config = load_decoder(run / "decoder.pt").decoder.config
+    assert config.dropout == 0.2 and config.weight_norm
+    _one_error_line(capsys, [*args, "--dropout", "0.5"], "made with dropout=0.2")
+    assert main(args) == 0  # slice 2 continues the run with the decoder it was made with
+    assert main(["slices", "status", "--run", str(run)]) == 0
+    assert "dropout 0.2, weight_norm True" in capsys.readouterr().out

@@ -26,7 +26,7 @@ from typing import Literal
 from centerart.errors import CenterArtError
 from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, check_run_files, read_ledger
 from centerart.recipe.slices import commit_folder, compare_replay, finish_pending, load_plan
-from centerart.utils.checks import at_least, positive
+from centerart.utils.checks import at_least, between, positive
 
 EXPORT = "decoder.pt"
 SAVE_EVERY_S = 300.0  # progress saved this often (and when a slice stops early)
@@ -39,6 +39,9 @@ class DecoderSlicePlan:
     preset: str
     kind: str = "decoder"
     decoder_preset: Literal["tiny", "small", "paper"] = "small"
+    decoder_overrides: dict = field(default_factory=dict)
+    """Decoder config fields over the preset's, e.g. ``{"dropout": 0.2, "weight_norm": true}`` (the paper's
+    regularisation on the small decoder); empty in plans made before it existed."""
     objects_seed: int = 0
     objects_count: int = 24
     """Objects per category (5 categories); ``heldout_object_fraction`` of them validate and are never trained on."""
@@ -80,7 +83,8 @@ class DecoderSlicePlan:
         fields = ("batch_items", "points_per_item", "max_points_per_state", "lr_decoder", "lr_codes", "code_weight",
                   "heldout_object_fraction", "heldout_states_per_object", "val_code_fit_steps", "seed")  # fmt: skip
         return TrainDecoderConfig(data=Path(work) / "sdf", out=Path(work), preset=self.decoder_preset, epochs=1,
-                                  progress=False, **{k: getattr(self, k) for k in fields})  # fmt: skip
+                                  progress=False, decoder_overrides=dict(self.decoder_overrides),
+                                  **{k: getattr(self, k) for k in fields})  # fmt: skip
 
 
 _TINY = DecoderSlicePlan(
@@ -109,6 +113,10 @@ class DecoderSlicesConfig:
     """Work folder for objects, labels, SDF samples and progress (not committed; regenerated from seeds)."""
     preset: Literal["tiny", "small"] = "small"
     """Plan of a new run (ignored once RUN/run.json exists)."""
+    dropout: float | None = None
+    """Dropout after each hidden layer of a new run's decoder (the paper: 0.2; default: the preset's)."""
+    weight_norm: bool | None = None
+    """Weight normalisation of a new run's decoder layers (the paper: on; default: the preset's)."""
     steps: int | None = None
     """Optimizer steps of this slice (default: the plan's)."""
     lr_scale: float = 1.0
@@ -133,15 +141,23 @@ class DecoderSlicesConfig:
         positive("--lr-scale", self.lr_scale)
         at_least("--max-minutes", self.max_minutes, 0.0)
         at_least("--threads", self.threads, 0)
+        if self.dropout is not None:
+            between("--dropout", self.dropout, 0.0, 0.9)
+
+    def decoder_overrides(self) -> dict:
+        """The new run's decoder fields given on the command line."""
+        given = {"dropout": self.dropout, "weight_norm": self.weight_norm}
+        return {k: v for k, v in given.items() if v is not None}
 
 
 # ---------------------------------------------------------------------------- plan and data
-def create_decoder_plan(run: Path, preset: str) -> DecoderSlicePlan:
+def create_decoder_plan(run: Path, preset: str, overrides: dict | None = None) -> DecoderSlicePlan:
     from centerart.utils.atomic import atomic_write_json
 
     if preset not in PRESETS:
         raise CenterArtError(f"unknown decoder slice preset {preset!r}; choose from {', '.join(PRESETS)}")
     plan = DecoderSlicePlan.from_dict(PRESETS[preset].to_dict())
+    plan.decoder_overrides = {**plan.decoder_overrides, **(overrides or {})}
     Path(run).mkdir(parents=True, exist_ok=True)
     atomic_write_json(Path(run) / "run.json", plan.to_dict())
     return plan
@@ -280,7 +296,13 @@ def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
     from centerart.utils.atomic import atomic_write_json
 
     run_dir, work = Path(cfg.run), Path(cfg.work)
-    plan = load_plan(run_dir, DecoderSlicePlan) or create_decoder_plan(run_dir, cfg.preset)
+    plan = load_plan(run_dir, DecoderSlicePlan) or create_decoder_plan(run_dir, cfg.preset, cfg.decoder_overrides())
+    made = asdict(plan.train_config(work).decoder_config())
+    differ = {k: v for k, v in cfg.decoder_overrides().items() if made[k] != v}
+    if differ:
+        made_with = ", ".join(f"{k}={made[k]}" for k in differ)
+        raise CenterArtError(f"{run_dir}: the run's decoder was made with {made_with}; --dropout and --weight-norm "
+                             "apply to a new run only")  # fmt: skip
     lines = read_ledger(run_dir, DECODER_LINE_FIELDS)
     k = len(lines) + 1
     work_slice = work / f"slice_{k:03d}"
@@ -362,7 +384,7 @@ def decoder_status_table(run: Path) -> str:
     check_run_files(run, lines)
     head = (f"{run}: decoder run, preset {plan.preset}, decoder {plan.decoder_preset}, {plan.objects_count} objects "
             f"per category (seed {plan.objects_seed}), batch {plan.batch_items} x {plan.points_per_item} points, lr "
-            f"{plan.lr_decoder} / {plan.lr_codes} (codes); figures in mm\n\n")  # fmt: skip
+            f"{plan.lr_decoder} / {plan.lr_codes} (codes){_overrides_note(plan)}; figures in mm\n\n")  # fmt: skip
     cols = ("slice", "steps", "total steps", "lr scale", "hours", *STATUS_COLUMNS)
     rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for x in lines:
@@ -372,6 +394,10 @@ def decoder_status_table(run: Path) -> str:
         row = [x["slice"], x["steps"], x["first_step"] + x["steps"], x["lr_scale"], f"{hours:.2f}", *figures]
         rows.append("| " + " | ".join(str(r) for r in row) + " |")
     return head + "\n".join(rows) + ("\n" if lines else "\n(no slice yet)\n")
+
+
+def _overrides_note(plan: DecoderSlicePlan) -> str:
+    return "".join(f", {k} {v}" for k, v in sorted(plan.decoder_overrides.items()))
 
 
 def replay_decoder(run_dir: Path, work: Path, workers: int | None, tolerance: float, progress: bool, echo) -> dict:
