@@ -39,6 +39,10 @@ def test_two_decoder_slices_write_a_ledger_that_replays(tiny_decoder_run, tmp_pa
     assert [x["lr_scale"] for x in lines] == [1.0, 0.5] and lines[0]["objects_sha256"] == lines[1]["objects_sha256"]
     assert lines[0]["objects"] == 4 and lines[0]["heldout_objects"] == 1
     assert "val_object/sdf_near" in lines[1]["validation"] and "start_validation" in lines[0]
+    # the held-out object's shape and grasps, meshed and executed (eval decoder's figures, in the line)
+    v = lines[1]["validation"]
+    assert v["heldout_eval/states"] == 1 and v["heldout_eval/physics_top1"] in (0.0, 1.0)
+    assert 0 < v.get("heldout_eval/chamfer_mm", 1) < 1000 and v["heldout_eval/empty_meshes"] in (0, 1)
     assert lines[1]["state_sha256"] == file_sha256(run / "state.pt")
     assert lines[1]["decoder_sha256"] == file_sha256(run / "decoder.pt")
     loaded = load_decoder(run / "decoder.pt")  # the exported decoder loads like any other
@@ -46,7 +50,8 @@ def test_two_decoder_slices_write_a_ledger_that_replays(tiny_decoder_run, tmp_pa
     assert loaded.code_weight == 1e-2  # new shape codes are fitted under the prior it was trained with
 
     assert main(["slices", "status", "--run", str(run)]) == 0
-    assert "| 2 | 2 | 5 | 0.5 |" in capsys.readouterr().out
+    table = capsys.readouterr().out
+    assert "| 2 | 2 | 5 | 0.5 |" in table and "heldout_eval/chamfer_mm" in table
     assert main(["slices", "replay", "--run", str(run), "--work", str(tmp_path / "replay"), *COMMON]) == 0
     assert "largest weight difference 0" in capsys.readouterr().out
 

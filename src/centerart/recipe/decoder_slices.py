@@ -64,6 +64,13 @@ class DecoderSlicePlan:
     steps: int = 2400
     """Default optimizer steps per slice."""
     val_code_fit_steps: int = 100
+    heldout_eval_states: int = 2
+    """After each slice, ``centerart eval decoder`` on the held-out objects at this many states each (closed and
+    open for 2; codes fitted to their SDF samples, meshes, the top 5 grasps executed, no critic): the Chamfer and
+    physics figures that the near-surface SDF error does not show (0: off). It changes no weight, so plans made
+    before it get it too, from their next slice on."""
+    heldout_eval_resolution: int = 128
+    """Mesh grid of that evaluation (cells per side)."""
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -91,7 +98,7 @@ _TINY = DecoderSlicePlan(
     preset="tiny", decoder_preset="tiny", objects_count=1, sdf_points=3000, heldout_object_fraction=0.2,
     grasps={"states": 2, "per_state": 4, "max_trials": 30, "max_candidates": 300, "keep_failures": 20},
     batch_items=4, points_per_item=256, max_points_per_state=3000, lr_decoder=2e-3, lr_codes=2e-3, steps=3,
-    val_code_fit_steps=5,
+    val_code_fit_steps=5, heldout_eval_states=1, heldout_eval_resolution=24,
 )  # fmt: skip
 """Tests: 5 objects (1 held out), 2 states of a few labels, 3000 SDF points, the tiny decoder, 3 steps a slice."""
 
@@ -360,15 +367,54 @@ def _finish_slice(run: _Run, run_dir: Path, lines: list[dict], work_slice: Path,
     metrics = {**line["validation"], "step": state.step}
     export_decoder(work_slice / EXPORT, run.train_cfg, state.module, run.data, train_config, metrics)
     line["decoder_sha256"] = file_sha256(work_slice / EXPORT)
+    if run.plan.heldout_eval_states > 0:
+        t0 = time.perf_counter()
+        line["validation"] |= evaluate_heldout(run, work_slice / EXPORT, work_slice)
+        line["wall_s"]["heldout_eval"] = round(time.perf_counter() - t0, 1)
     atomic_write_json(work_slice / "line.json", line)
     finish_pending(run_dir, lines, work_slice, EXPORT)
     return line
 
 
+#: Figures of :func:`evaluate_heldout` (``centerart eval decoder``'s held-out-object summary) kept in the line;
+#: the Chamfer figures are over the non-empty meshes (absent when every mesh is empty).
+HELDOUT_EVAL_FIGURES = (
+    "chamfer_mm", "chamfer_mm_median", "fscore", "empty_meshes", "physics_top1", "physics_any5", "states"
+)  # fmt: skip
+
+
+def evaluate_heldout(run: _Run, checkpoint: Path, work_slice: Path) -> dict:
+    """``centerart eval decoder`` of ``checkpoint`` on the run's held-out objects (``WORK/slice_k/heldout_eval``):
+    their codes fitted to all their SDF samples, meshes, and the top 5 grasps executed in physics (no critic:
+    the decoder alone); returns the summary's :data:`HELDOUT_EVAL_FIGURES` as ``heldout_eval/<name>``."""
+    from centerart.evaluation.decoder_eval import EvalDecoderConfig, evaluate_decoder
+
+    sdf = work_slice / "heldout_sdf"  # eval decoder reads every object of its --data: only the held-out ones
+    sdf.mkdir(parents=True, exist_ok=True)
+    for oid in run.data.split.heldout_objects:
+        if not (sdf / oid).exists():
+            (sdf / oid).symlink_to((run.work / "sdf" / oid).resolve())
+    cfg = EvalDecoderConfig(
+        data=sdf, objects=run.work / "objects", grasps=run.work / "grasps", checkpoint=checkpoint,
+        out=work_slice / "heldout_eval", states_per_object=run.plan.heldout_eval_states,
+        resolution=run.plan.heldout_eval_resolution, grasp_critic=False, seed=run.plan.seed,
+    )  # fmt: skip
+    summary = evaluate_decoder(cfg)["summary"].get("heldout_object", {})
+    return {
+        f"heldout_eval/{k}": round(float(summary[k]), 6) for k in HELDOUT_EVAL_FIGURES if summary.get(k) is not None
+    }
+
+
 def commit_decoder_run(run: Path, line: dict) -> str:
-    sdf = line["validation"].get("val_object/sdf_near", float("nan")) * 1000
-    message = (f"slices: {Path(run).resolve().name} slice {line['slice']} ({line['steps']} decoder steps; held-out "
-               f"objects' SDF error near the surface {sdf:.2f} mm)")  # fmt: skip
+    v = line["validation"]
+    if "heldout_eval/chamfer_mm" in v:
+        figure = (f"held-out objects' Chamfer {v['heldout_eval/chamfer_mm']:.1f} mm, top-1 "
+                  f"{v.get('heldout_eval/physics_top1', float('nan')):.2f}")  # fmt: skip
+    else:
+        figure = (
+            f"held-out objects' SDF error near the surface {v.get('val_object/sdf_near', float('nan')) * 1000:.2f} mm"
+        )
+    message = f"slices: {Path(run).resolve().name} slice {line['slice']} ({line['steps']} decoder steps; {figure})"
     return commit_folder(run, message)
 
 
@@ -376,6 +422,8 @@ def commit_decoder_run(run: Path, line: dict) -> str:
 #: Validation figures of the status table, in mm (keys of DecoderModule's metrics).
 STATUS_COLUMNS = ("val_object/sdf", "val_object/sdf_near", "val_object/grasp_near", "val_state/sdf_near",
                   "val_state/grasp_near")  # fmt: skip
+#: Figures of the held-out evaluation in the status table (Chamfer in mm, top-1 a rate).
+EVAL_COLUMNS = ("heldout_eval/chamfer_mm", "heldout_eval/physics_top1")
 
 
 def decoder_status_table(run: Path) -> str:
@@ -385,11 +433,12 @@ def decoder_status_table(run: Path) -> str:
     head = (f"{run}: decoder run, preset {plan.preset}, decoder {plan.decoder_preset}, {plan.objects_count} objects "
             f"per category (seed {plan.objects_seed}), batch {plan.batch_items} x {plan.points_per_item} points, lr "
             f"{plan.lr_decoder} / {plan.lr_codes} (codes){_overrides_note(plan)}; figures in mm\n\n")  # fmt: skip
-    cols = ("slice", "steps", "total steps", "lr scale", "hours", *STATUS_COLUMNS)
+    cols = ("slice", "steps", "total steps", "lr scale", "hours", *STATUS_COLUMNS, *EVAL_COLUMNS)
     rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for x in lines:
         v = x["validation"]
         figures = [f"{v[c] * 1000:.2f}" if c in v else "-" for c in STATUS_COLUMNS]
+        figures += [f"{v[c]:.2f}" if c in v else "-" for c in EVAL_COLUMNS]
         hours = sum(x.get("wall_s", {}).values()) / 3600
         row = [x["slice"], x["steps"], x["first_step"] + x["steps"], x["lr_scale"], f"{hours:.2f}", *figures]
         rows.append("| " + " | ".join(str(r) for r in row) + " |")
