@@ -71,8 +71,9 @@ class SlicePlan:
     decoder_sha256: str = ""
     objects_seed: int = 0
     objects_count: int = 8
-    """Objects per category generated with ``objects_seed``; the decoder's training objects among them are the
-    slices' objects, its held-out objects the validation set's (checked by content fingerprint)."""
+    """Objects per category generated with ``objects_seed`` (a new run takes it from its decoder's objects); the
+    decoder's training objects among them are the slices' objects, its held-out objects the validation set's
+    (checked by content fingerprint)."""
     variety: Literal["classic", "extended"] = "classic"
     seed: int = 0
     """Seed of the initial weights, batch order and augmentation."""

@@ -46,13 +46,13 @@ class SlicesNextConfig:
     init: Path | None = None
     """A new run starts from this encoder checkpoint instead of random weights (ignored once the run exists)."""
     seed_block: int = 0
-    """Scene-seed block of a new run (ignored once the run exists); an --init made by a sliced run needs
-    another block than that run's, so that no slice repeats the scenes its start was trained on."""
+    """Scene-seed block of a new run (ignored once the run exists); an --init made by a sliced run needs a
+    block above that run's, so that no slice repeats the scenes its start (or the start's start) was trained on."""
     decoder: Path | None = None
     """A new run trains against this decoder checkpoint (e.g. a decoder run's ``decoder.pt``), copied into
-    ``RUN/decoder.pt``, instead of the preset's (the shipped ``sgdf_small.pt``); the objects per category follow
-    from its training and held-out objects. An --init trained against another decoder is then a warm start
-    (ignored once the run exists)."""
+    ``RUN/decoder.pt``, instead of the preset's (the shipped ``sgdf_small.pt``). Either way the objects per
+    category follow from the decoder's training and held-out objects. An --init trained against another decoder
+    is then a warm start (ignored once the run exists)."""
     steps: int | None = None
     """Optimizer steps of this slice (default: the plan's)."""
     kitchen: int | None = None
@@ -147,12 +147,14 @@ def create_plan(
     plan = plan_preset(preset)
     plan.encoder = encoder_preset(plan.encoder_preset).to_dict()  # today's defaults, kept for every slice
     if decoder is not None:
-        plan.objects_count = decoder_objects_per_category(Path(decoder))
         # A copy in the run folder, as for --init: a decoder run rewrites its decoder.pt at every slice.
         plan.decoder = _copy_into_run(Path(decoder), Path(run) / "decoder.pt")
     path = _repo_path(plan.decoder)
     if not path.is_file():
         raise CenterArtError(f"{path}: the plan's decoder checkpoint is missing")
+    # From the decoder itself, the shipped one too: the shipped file was made from 8 objects per category until
+    # session 19 and from 24 since, and a plan keeps the count it was made with.
+    plan.objects_count = decoder_objects_per_category(path)
     plan.decoder_sha256 = file_sha256(path)
     plan.seed_block = seed_block
     if init is not None:
@@ -208,10 +210,13 @@ def _check_seed_block(init: Path, seed_block: int) -> None:
         trained = (torch.load(init, map_location="cpu", weights_only=True).get("train_config") or {}).get("sliced_run")
     except Exception:  # a damaged file: new_state reports it (load_encoder's one-line error)
         return
-    if isinstance(trained, dict) and int(trained.get("seed_block", 0)) == seed_block:
+    # Blocks grow along a lineage (each run takes a block above its start's), so a block above the start's is one
+    # that no ancestor of it rendered either.
+    if isinstance(trained, dict) and int(trained.get("seed_block", 0)) >= seed_block:
+        block = int(trained.get("seed_block", 0))
         raise CenterArtError(
-            f"--init {init}: trained on slices of seed block {seed_block}; pass --seed-block {seed_block + 1} so the "
-            "new run renders other scenes"
+            f"--init {init}: trained on slices of seed block {block}; pass --seed-block {block + 1} (or higher) so "
+            "the new run renders scenes no encoder it came from was trained on"
         )
 
 
