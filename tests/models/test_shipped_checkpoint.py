@@ -1,6 +1,7 @@
 """The shipped ``small`` checkpoint loads and reconstructs a training object within its reported Chamfer distance."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -47,17 +48,28 @@ def test_shipped_checkpoint_reconstructs_training_object(shipped, tmp_path):
     assert np.all(np.diff(grasps.scores) <= 1e-12)  # grasps (if any) come ranked
 
 
-def test_shipped_grasp_critic_belongs_to_the_shipped_decoder(shipped):
-    """The critic beside the shipped checkpoint loads with it (its SHA-256 matches) and gives probabilities that
-    grow with the gripper's clearance, the feature it weighs most (``weights/README.md``)."""
-    from centerart.models.grasp_critic import GRASP_FEATURES
+def test_a_grasp_critic_loads_with_its_own_decoder_only(shipped, tmp_path):
+    """The shipped decoder has no critic since session 19 (none was fitted to it: its grasps are ranked by their
+    agreement and the observation's cues). The critic of the file shipped before loads beside that file, and gives
+    probabilities that grow with the gripper's clearance, the feature it weighs most (``weights/README.md``);
+    beside the shipped decoder it is refused (its SHA-256 names the other file)."""
+    import shutil
 
-    critic = shipped.critic
+    from centerart.errors import CenterArtError
+    from centerart.models.grasp_critic import GRASP_FEATURES, critic_path
+
+    assert shipped.critic is None
+    before = WEIGHTS_DIR.parents[2] / "benchmarks" / "results" / "recipe_cw1e-2" / "decoder" / "decoder.pt"
+    critic = load_decoder(before).critic
     assert critic is not None and critic.info["objects"] >= 40
     x = np.tile(critic.mean, (3, 1))
     x[:, GRASP_FEATURES.index("clearance_m")] += np.array([-0.01, 0.0, 0.01])
     p = critic.probability(x)
     assert ((p > 0) & (p < 1)).all() and np.all(np.diff(p) > 0)
+    other = Path(shutil.copy(default_checkpoint(), tmp_path / "decoder.pt"))
+    shutil.copy(critic_path(before), critic_path(other))
+    with pytest.raises(CenterArtError, match="critic"):
+        load_decoder(other)
 
 
 def test_codes_are_fitted_under_the_prior_the_decoder_was_trained_with(shipped):

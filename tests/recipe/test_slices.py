@@ -36,7 +36,7 @@ def tiny_run(tmp_path_factory) -> tuple[Path, Path]:
     return run, work
 
 
-@pytest.mark.slow  # ~40 s on 2 cores: 40 objects, 8 tiny scenes, two slices and their replay
+@pytest.mark.slow  # ~70 s on 2 cores: 120 objects, 8 tiny scenes, two slices and their replay
 def test_two_slices_write_a_ledger_that_replays_to_the_same_weights(tiny_run, tmp_path, capsys):
     run, _ = tiny_run
     lines = read_ledger(run)
@@ -56,7 +56,7 @@ def test_two_slices_write_a_ledger_that_replays_to_the_same_weights(tiny_run, tm
     loaded = load_encoder(run / "encoder.pt")
     assert loaded.encoder.config == PRESETS["tiny"].__class__(**{**PRESETS["tiny"].to_dict(), "code_dim": 32})
     assert loaded.meta["metrics"]["val/views"] == 2
-    assert len(torch.load(run / "encoder.pt", weights_only=True)["training_objects"]) == 34
+    assert len(torch.load(run / "encoder.pt", weights_only=True)["training_objects"]) == 102  # the shipped decoder's
 
     assert main(["slices", "status", "--run", str(run)]) == 0
     table = capsys.readouterr().out
@@ -125,19 +125,22 @@ def test_a_plan_saved_before_new_fields_trains_as_it_did_then():
 
 
 def test_a_run_started_from_a_sliced_runs_encoder_takes_another_seed_block(tmp_path, capsys):
-    """The shipped encoder came out of slices of seed block 0: a run from it must render other scenes."""
+    """The shipped encoder came out of slices of seed block 2: a run from it must render other scenes."""
     from centerart.models.encoder.checkpoint import default_encoder
     from centerart.recipe.slice_plan import slice_seeds
     from centerart.recipe.slices import create_plan
 
     args = ["slices", "next", "--run", str(tmp_path / "run"), "--work", str(tmp_path / "work"),
-            "--init", str(default_encoder()), *COMMON]  # fmt: skip
-    _one_error_line(capsys, args, "--seed-block 1")
+            "--init", str(default_encoder()), "--seed-block", "2", *COMMON]  # fmt: skip
+    _one_error_line(capsys, args, "--seed-block 3")
+    # a block below it too: blocks grow along a lineage, and block 1 is the one its start was trained on
+    _one_error_line(capsys, [*args[:-len(COMMON) - 1], "1", *COMMON], "--seed-block 3")
     assert not (tmp_path / "work").exists() and not (tmp_path / "run").exists()
-    plan = create_plan(tmp_path / "run2", "small", default_encoder(), seed_block=1)
-    assert plan.seed_block == 1 and (tmp_path / "run2" / "init.pt").is_file()
-    assert set(slice_seeds(1, 1).values()).isdisjoint(
-        slice_seeds(k, 0)[s] for k in range(1, 999) for s in ("kitchen", "single")
+    plan = create_plan(tmp_path / "run2", "small", default_encoder(), seed_block=3)
+    assert plan.seed_block == 3 and (tmp_path / "run2" / "init.pt").is_file()
+    assert plan.objects_count == 24  # the shipped decoder's objects per category
+    assert set(slice_seeds(1, 3).values()).isdisjoint(
+        slice_seeds(k, 2)[s] for k in range(1, 999) for s in ("kitchen", "single")
     )
 
 
@@ -151,15 +154,15 @@ def test_a_run_against_another_decoder_keeps_a_copy_and_warm_starts_from_an_enco
     blob = torch.load(default_checkpoint(), map_location="cpu", weights_only=True)
     other = tmp_path / "other_decoder.pt"
     torch.save({**blob, "metrics": {"note": 1.0}}, other)  # the same objects and codes, another file
-    plan = create_plan(tmp_path / "run", "small", default_encoder(), seed_block=1, decoder=other)
-    assert plan.objects_count == 8 and plan.init_other_decoder
+    plan = create_plan(tmp_path / "run", "small", default_encoder(), seed_block=3, decoder=other)
+    assert plan.objects_count == 24 and plan.init_other_decoder
     assert file_sha256(tmp_path / "run" / "decoder.pt") == plan.decoder_sha256 == file_sha256(other)
     config = encoder_config(plan, load_shape_codes(other))
     assert initial_state(plan, config).step == 0
     plan.init_other_decoder = False  # what a run without --decoder checks: the init's decoder must be the run's
     with pytest.raises(CenterArtError, match="trained against the shape codes"):
         initial_state(plan, config)
-    same = create_plan(tmp_path / "run2", "small", default_encoder(), seed_block=1, decoder=default_checkpoint())
+    same = create_plan(tmp_path / "run2", "small", default_encoder(), seed_block=3, decoder=default_checkpoint())
     assert not same.init_other_decoder
     _one_error_line(capsys, ["slices", "next", "--run", str(tmp_path / "run3"), "--work", str(tmp_path / "w"),
                              "--decoder", str(default_encoder()), *COMMON], "not a decoder checkpoint")  # fmt: skip
