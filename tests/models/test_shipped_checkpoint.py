@@ -49,10 +49,11 @@ def test_shipped_checkpoint_reconstructs_training_object(shipped, tmp_path):
 
 
 def test_a_grasp_critic_loads_with_its_own_decoder_only(shipped, tmp_path):
-    """The shipped decoder has no critic since session 19 (none was fitted to it: its grasps are ranked by their
-    agreement and the observation's cues). The critic of the file shipped before loads beside that file, and gives
-    probabilities that grow with the gripper's clearance, the feature it weighs most (``weights/README.md``);
-    beside the shipped decoder it is refused (its SHA-256 names the other file)."""
+    """The shipped decoder has no critic beside it since session 19 (the one fitted to it moved the closed loop
+    both ways and is kept in ``benchmarks/results/grasp_critic_s19``; it loads beside a copy of the shipped file).
+    The critic of the file shipped before loads beside that file, and gives probabilities that grow with the
+    gripper's clearance, the feature it weighs most (``weights/README.md``); beside the shipped decoder it is
+    refused (its SHA-256 names the other file)."""
     import shutil
 
     from centerart.errors import CenterArtError
@@ -70,6 +71,9 @@ def test_a_grasp_critic_loads_with_its_own_decoder_only(shipped, tmp_path):
     shutil.copy(critic_path(before), critic_path(other))
     with pytest.raises(CenterArtError, match="critic"):
         load_decoder(other)
+    fitted = WEIGHTS_DIR.parents[2] / "benchmarks" / "results" / "grasp_critic_s19" / "sgdf_small.pt.critic.json"
+    shutil.copy(fitted, critic_path(other))
+    assert load_decoder(other).critic.info["objects"] == 40
 
 
 def test_codes_are_fitted_under_the_prior_the_decoder_was_trained_with(shipped):

@@ -134,7 +134,7 @@ def test_a_run_started_from_a_sliced_runs_encoder_takes_another_seed_block(tmp_p
             "--init", str(default_encoder()), "--seed-block", "2", *COMMON]  # fmt: skip
     _one_error_line(capsys, args, "--seed-block 3")
     # a block below it too: blocks grow along a lineage, and block 1 is the one its start was trained on
-    _one_error_line(capsys, [*args[:-len(COMMON) - 1], "1", *COMMON], "--seed-block 3")
+    _one_error_line(capsys, [*args[: -len(COMMON) - 1], "1", *COMMON], "--seed-block 3")
     assert not (tmp_path / "work").exists() and not (tmp_path / "run").exists()
     plan = create_plan(tmp_path / "run2", "small", default_encoder(), seed_block=3)
     assert plan.seed_block == 3 and (tmp_path / "run2" / "init.pt").is_file()
