@@ -60,7 +60,8 @@ def test_a_grasp_critic_loads_with_its_own_decoder_only(shipped, tmp_path):
     from centerart.models.grasp_critic import GRASP_FEATURES, critic_path
 
     assert shipped.critic is None
-    before = WEIGHTS_DIR.parents[2] / "benchmarks" / "results" / "recipe_cw1e-2" / "decoder" / "decoder.pt"
+    results = WEIGHTS_DIR.parents[2] / "benchmarks" / "results"
+    before = results / "recipe_cw1e-2" / "decoder" / "decoder.pt"
     critic = load_decoder(before).critic
     assert critic is not None and critic.info["objects"] >= 40
     x = np.tile(critic.mean, (3, 1))
@@ -71,8 +72,7 @@ def test_a_grasp_critic_loads_with_its_own_decoder_only(shipped, tmp_path):
     shutil.copy(critic_path(before), critic_path(other))
     with pytest.raises(CenterArtError, match="critic"):
         load_decoder(other)
-    fitted = WEIGHTS_DIR.parents[2] / "benchmarks" / "results" / "grasp_critic_s19" / "sgdf_small.pt.critic.json"
-    shutil.copy(fitted, critic_path(other))
+    shutil.copy(results / "grasp_critic_s19" / "sgdf_small.pt.critic.json", critic_path(other))
     assert load_decoder(other).critic.info["objects"] == 40
 
 

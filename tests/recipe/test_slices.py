@@ -166,3 +166,4 @@ def test_a_run_against_another_decoder_keeps_a_copy_and_warm_starts_from_an_enco
     assert not same.init_other_decoder
     _one_error_line(capsys, ["slices", "next", "--run", str(tmp_path / "run3"), "--work", str(tmp_path / "w"),
                              "--decoder", str(default_encoder()), *COMMON], "not a decoder checkpoint")  # fmt: skip
+    assert not (tmp_path / "run3").exists()  # refused before anything was copied

@@ -146,16 +146,16 @@ def create_plan(
 
     plan = plan_preset(preset)
     plan.encoder = encoder_preset(plan.encoder_preset).to_dict()  # today's defaults, kept for every slice
+    source = Path(decoder) if decoder is not None else _repo_path(plan.decoder)
+    if decoder is None and not source.is_file():
+        raise CenterArtError(f"{source}: the plan's decoder checkpoint is missing")
+    # Read before anything is copied (a bad --decoder leaves no run folder), and from the shipped file too: it was
+    # made from 8 objects per category until session 19 and from 24 since, and a plan keeps the count it was made with.
+    plan.objects_count = decoder_objects_per_category(source)
     if decoder is not None:
         # A copy in the run folder, as for --init: a decoder run rewrites its decoder.pt at every slice.
-        plan.decoder = _copy_into_run(Path(decoder), Path(run) / "decoder.pt")
-    path = _repo_path(plan.decoder)
-    if not path.is_file():
-        raise CenterArtError(f"{path}: the plan's decoder checkpoint is missing")
-    # From the decoder itself, the shipped one too: the shipped file was made from 8 objects per category until
-    # session 19 and from 24 since, and a plan keeps the count it was made with.
-    plan.objects_count = decoder_objects_per_category(path)
-    plan.decoder_sha256 = file_sha256(path)
+        plan.decoder = _copy_into_run(source, Path(run) / "decoder.pt")
+    plan.decoder_sha256 = file_sha256(source)
     plan.seed_block = seed_block
     if init is not None:
         if not Path(init).is_file():
@@ -212,8 +212,8 @@ def _check_seed_block(init: Path, seed_block: int) -> None:
         return
     # Blocks grow along a lineage (each run takes a block above its start's), so a block above the start's is one
     # that no ancestor of it rendered either.
-    if isinstance(trained, dict) and int(trained.get("seed_block", 0)) >= seed_block:
-        block = int(trained.get("seed_block", 0))
+    block = int(trained.get("seed_block", 0)) if isinstance(trained, dict) else None
+    if block is not None and block >= seed_block:
         raise CenterArtError(
             f"--init {init}: trained on slices of seed block {block}; pass --seed-block {block + 1} (or higher) so "
             "the new run renders scenes no encoder it came from was trained on"
