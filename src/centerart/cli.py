@@ -147,7 +147,7 @@ COMMANDS: dict[str, dict[str, Command]] = {
         "status": Command(
             "centerart.recipe.slices:SlicesStatusConfig",
             "centerart.commands:slices_status",
-            "a sliced run's plan and ledger (validation figures per slice)",
+            "a sliced run's plan and ledger (validation figures per slice); --plot draws its learning curve",
         ),
         "replay": Command(
             "centerart.recipe.slices:SlicesReplayConfig",

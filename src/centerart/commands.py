@@ -217,9 +217,13 @@ def _slice_done(cfg, line: dict, summary: str, commit, export: str) -> None:
 
 
 def slices_status(cfg) -> None:
-    from centerart.recipe.slices import status_table
+    from centerart.recipe.slices import learning_curve, status_table
 
     print(status_table(cfg.run), end="")
+    if cfg.plot is not None:
+        from centerart.viz.learning_curve import draw_learning_curve
+
+        print(f"learning curve: {draw_learning_curve(learning_curve(cfg.run), cfg.plot)}")
 
 
 def slices_replay(cfg) -> None:

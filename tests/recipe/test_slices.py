@@ -17,9 +17,12 @@ from centerart.models.checkpoint_files import file_sha256
 from centerart.models.encoder.checkpoint import load_encoder
 from centerart.models.encoder.config import PRESETS
 from centerart.recipe.ledger import read_ledger
+from centerart.recipe.slices import learning_curve
 from centerart.training.slice_training import load_state, new_state, save_state
+from centerart.viz.learning_curve import draw_learning_curve
 
 COMMON = ["--threads", "1", "--workers", "1", "--no-progress"]
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 @pytest.fixture(scope="module")
@@ -58,9 +61,10 @@ def test_two_slices_write_a_ledger_that_replays_to_the_same_weights(tiny_run, tm
     assert loaded.meta["metrics"]["val/views"] == 2
     assert len(torch.load(run / "encoder.pt", weights_only=True)["training_objects"]) == 102  # the shipped decoder's
 
-    assert main(["slices", "status", "--run", str(run)]) == 0
+    assert main(["slices", "status", "--run", str(run), "--plot", str(tmp_path / "curve.png")]) == 0
     table = capsys.readouterr().out
-    assert "| 2 | 2 | 5 | 3 | 6 |" in table
+    assert "| 2 | 2 | 5 | 3 | 6 |" in table and f"learning curve: {tmp_path / 'curve.png'}" in table
+    assert (tmp_path / "curve.png").read_bytes()[:8] == PNG_SIGNATURE
     # The replay trains each slice in one go: equal weights also say the stopped-and-resumed slice 1 lost nothing.
     assert main(["slices", "replay", "--run", str(run), "--work", str(tmp_path / "replay"), *COMMON]) == 0
     assert "largest weight difference 0" in capsys.readouterr().out
@@ -167,3 +171,45 @@ def test_a_run_against_another_decoder_keeps_a_copy_and_warm_starts_from_an_enco
     _one_error_line(capsys, ["slices", "next", "--run", str(tmp_path / "run3"), "--work", str(tmp_path / "w"),
                              "--decoder", str(default_encoder()), *COMMON], "not a decoder checkpoint")  # fmt: skip
     assert not (tmp_path / "run3").exists()  # refused before anything was copied
+
+
+def _write_ledger(run: Path, lines: list[dict], plan: dict | None = None) -> None:
+    run.mkdir(exist_ok=True)
+    (run / "ledger.jsonl").write_text("".join(json.dumps(x) + "\n" for x in lines))
+    if plan is not None:
+        (run / "run.json").write_text(json.dumps(plan))
+
+
+def test_the_learning_curve_starts_where_the_run_started_and_has_a_point_per_slice(tmp_path):
+    base = {"seeds": {}, "data": {}, "batch_size": 8, "lr_scale": 1.0, "images": 10, "state_sha256": "x",
+            "code_version": "v"}  # fmt: skip
+    first = {**base, "slice": 1, "steps": 4, "first_step": 0, "distinct_images": 10,
+             "validation": {"recall": 0.5, "translation_cm_median": 6.0},
+             "start_validation": {"recall": 0.25, "translation_cm_median": 9.0}}  # fmt: skip
+    second = {**base, "slice": 2, "steps": 6, "first_step": 4, "distinct_images": 20, "validation": {"recall": 0.75}}
+    _write_ledger(tmp_path / "run", [first, second])
+    curve = learning_curve(tmp_path / "run")
+    assert curve["kind"] == "encoder" and curve["columns"] == ["recall", "translation_cm_median"]
+    assert curve["units"] == {"recall": "rate", "translation_cm_median": "cm"}
+    points = curve["points"]
+    assert [(p["slice"], p["total_steps"], p["distinct_images"]) for p in points] == [
+        (0, 0, 0),
+        (1, 4, 10),
+        (2, 10, 20),
+    ]
+    assert [p["recall"] for p in points] == [0.25, 0.5, 0.75] and points[2]["translation_cm_median"] is None
+    assert draw_learning_curve(curve, tmp_path / "curve.png").read_bytes()[:8] == PNG_SIGNATURE
+
+
+def test_a_decoder_runs_learning_curve_is_in_mm_and_an_empty_ledger_is_one_error(tmp_path):
+    line = {"slice": 1, "steps": 3, "first_step": 0, "batch_size": 2, "lr_scale": 1.0, "objects_sha256": "o",
+            "state_sha256": "s", "code_version": "v", "validation": {"val_object/sdf_near": 0.004},
+            "start_validation": {"val_object/sdf_near": 0.005}}  # fmt: skip
+    _write_ledger(tmp_path / "dec", [line], {"kind": "decoder"})
+    curve = learning_curve(tmp_path / "dec")
+    assert curve["kind"] == "decoder" and curve["units"] == {"val_object/sdf_near": "mm"}
+    assert [p["val_object/sdf_near"] for p in curve["points"]] == pytest.approx([5.0, 4.0])
+    assert [p["distinct_images"] for p in curve["points"]] == [None, None]
+    _write_ledger(tmp_path / "empty", [])
+    with pytest.raises(CenterArtError, match="no slice in its ledger yet"):
+        learning_curve(tmp_path / "empty")

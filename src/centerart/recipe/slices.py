@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Literal
 
 from centerart.errors import CenterArtError
-from centerart.recipe.ledger import STATE, append_line, check_run_files, read_ledger
+from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, append_line, check_run_files, read_ledger
 from centerart.recipe.slice_plan import SliceData, SlicePlan, plan_preset, slice_seeds
 from centerart.utils.checks import at_least, positive
 
@@ -93,6 +93,9 @@ class SlicesStatusConfig:
     """Print a sliced run's plan and ledger."""
 
     run: Path
+    plot: Path | None = None
+    """Also draw the learning curve (each validation figure against the run's steps, one point per slice) into
+    this PNG."""
 
 
 @dataclass
@@ -585,6 +588,42 @@ def status_table(run: Path) -> str:
                f"{hours:.2f}", *figures]  # fmt: skip
         rows.append("| " + " | ".join(str(r) for r in row) + " |")
     return head + "\n".join(rows) + ("\n" if lines else "\n(no slice yet)\n")
+
+
+def learning_curve(run: Path) -> dict:
+    """A sliced run's validation figures against its steps: where it started (its first line's
+    ``start_validation``, at step 0) and after each slice.
+
+    Returns ``{"run", "kind", "columns", "units", "points"}``; each point has ``slice`` (0: the start),
+    ``total_steps``, ``distinct_images`` (encoder runs; None for a decoder run) and the figures of ``columns``
+    (the status table's, a decoder run's distances in mm), None where a line lacks one."""
+    kind = run_kind(run)
+    if kind == "decoder":
+        from centerart.recipe.decoder_slices import EVAL_COLUMNS
+        from centerart.recipe.decoder_slices import STATUS_COLUMNS as DECODER_COLUMNS
+
+        lines = read_ledger(run, DECODER_LINE_FIELDS)
+        scales = {c: 1000.0 for c in DECODER_COLUMNS} | {c: 1.0 for c in EVAL_COLUMNS}
+        units = {c: "mm" for c in DECODER_COLUMNS} | {EVAL_COLUMNS[0]: "mm", EVAL_COLUMNS[1]: "rate"}
+    else:
+        lines = read_ledger(run)
+        scales = {c: 1.0 for c in STATUS_COLUMNS}
+        units = {"recall": "rate", "precision": "rate", "translation_cm_median": "cm",
+                 "rotation_deg_median": "deg", "joint_type_accuracy": "rate"}  # fmt: skip
+    if not lines:
+        raise CenterArtError(f"{run}: no slice in its ledger yet, so no learning curve")
+    columns = [c for c in scales if any(c in x["validation"] for x in lines)]
+
+    def point(slice_index: int, steps: int, images, figures: dict) -> dict:
+        values = {c: (float(figures[c]) * scales[c] if c in figures else None) for c in columns}
+        return {"slice": slice_index, "total_steps": steps, "distinct_images": images, **values}
+
+    points = [point(0, 0, 0 if kind == "encoder" else None, lines[0].get("start_validation", {}))]
+    for x in lines:
+        images = x.get("distinct_images") if kind == "encoder" else None
+        points.append(point(x["slice"], x["first_step"] + x["steps"], images, x["validation"]))
+    return {"run": str(run), "kind": kind, "columns": columns, "units": {c: units[c] for c in columns},
+            "points": points}  # fmt: skip
 
 
 def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
