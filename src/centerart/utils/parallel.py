@@ -65,15 +65,25 @@ def parallel_map(
                 yield fn(item)
                 bar.update()
         else:
-            ctx = mp.get_context("spawn")
-            n = min(workers, len(items))
-            with ProcessPoolExecutor(max_workers=n, mp_context=ctx, max_tasks_per_child=WORKER_MAX_TASKS) as pool:
-                futures = [pool.submit(fn, item) for item in items]
-                for fut in as_completed(futures):
-                    yield fut.result()
-                    bar.update()
+            yield from _pool_map(fn, items, workers, bar)
     finally:
         bar.close()
+
+
+def _pool_map(fn: Callable[[T], R], items: list[T], workers: int, bar) -> Iterator[R]:
+    """A fresh spawn pool per ``workers * WORKER_MAX_TASKS`` items, so no worker outlives its quota.
+
+    Written here rather than with the executor's ``max_tasks_per_child``: on Python 3.11 a pool whose workers
+    reach that quota is not refilled and hangs (CPython gh-115634, fixed only in later versions)."""
+    ctx = mp.get_context("spawn")
+    n = min(workers, len(items))
+    chunk = n * WORKER_MAX_TASKS
+    for start in range(0, len(items), chunk):
+        with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
+            futures = [pool.submit(fn, item) for item in items[start : start + chunk]]
+            for fut in as_completed(futures):
+                yield fut.result()
+                bar.update()
 
 
 def init_ray(address: str, workers: int | None = None) -> bool:
