@@ -18,9 +18,10 @@ from tqdm.auto import tqdm
 
 from centerart.errors import CenterArtError
 
-#: Items a pool worker runs before a fresh process replaces it. A scene worker grows with every scene it renders:
-#: a slice's 4,000 kitchen scenes on 2 workers made one the kernel's out-of-memory victim at 12 GB after about
-#: 1,800 scenes (session 22). A fresh worker costs a few seconds of imports.
+#: Items per worker of one pool: about what each worker runs before fresh processes replace it (the pool hands
+#: items out as workers free up, so a slow worker runs fewer and a fast one more). A scene worker grows with every
+#: scene it renders: a slice's 4,000 kitchen scenes on 2 workers made one the kernel's out-of-memory victim at 12 GB
+#: after about 1,800 scenes (session 22). A fresh worker costs a few seconds of imports.
 WORKER_MAX_TASKS = 200
 
 T = TypeVar("T")
@@ -71,7 +72,8 @@ def parallel_map(
 
 
 def _pool_map(fn: Callable[[T], R], items: list[T], workers: int, bar) -> Iterator[R]:
-    """A fresh spawn pool per ``workers * WORKER_MAX_TASKS`` items, so no worker outlives its quota.
+    """A fresh spawn pool per ``workers * WORKER_MAX_TASKS`` items, so no worker lives through more than one pool's
+    share (the cores wait at each pool's last items: a few seconds per pool, beside minutes of work).
 
     Written here rather than with the executor's ``max_tasks_per_child``: on Python 3.11 a pool whose workers
     reach that quota is not refilled and hangs (CPython gh-115634, fixed only in later versions)."""
