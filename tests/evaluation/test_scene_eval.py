@@ -83,6 +83,52 @@ def test_stage_losses_attribute_each_failure_once():
     assert s["sr"] == 0.2 and s["sr_with_true_pose_and_joint"] == 0.4
 
 
+def test_a_fitted_shape_code_splits_the_encoders_code_from_the_decoders_grasps():
+    rows = [
+        _row(instance=0, sr_gt_pose=True, sr_gt_pose_code=None),  # pose and joint (no code swap needed)
+        _row(instance=1, sr_gt_pose=False, sr_gt_pose_code=True),  # the encoder's shape code
+        _row(instance=2, sr_gt_pose=False, sr_gt_pose_code=False),  # the decoder's grasps
+        _row(instance=3, sr=True, sr_gt_pose=False, sr_gt_pose_code=None),
+        _row(instance=4, matched=False),  # a miss holds no swap
+    ]
+    s = stage_losses(rows, [_row(instance=i, sr=True) for i in range(5)])
+    assert s["failures_by_stage"] == {"detection": 1, "pose_and_joint": 1, "shape_code": 1,
+                                      "shape_and_grasp_decoding": 1, "execution": 0}  # fmt: skip
+    assert s["sr"] == 0.2 and s["sr_with_true_pose_and_joint"] == 0.4
+    assert s["sr_with_true_pose_joint_and_code"] == 0.6
+
+
+def test_the_oracle_code_fits_the_objects_surface_better_than_the_mean_code(ctx):
+    """The code fitted to the object's true surface (the shape-code stage) must describe that surface: its SDF error
+    on fresh samples of it is below the zero code's (the mean of the code prior), and the fit is deterministic."""
+    import torch
+
+    from centerart.evaluation.code_oracle import oracle_code
+    from centerart.models.checkpoint import load_decoder
+    from centerart.sdf.sampling import SamplingConfig, sample_points, signed_distance
+    from centerart.sdf.surface import object_surface
+
+    _, c = ctx
+    loaded, obj, q = load_decoder(default_checkpoint()), c.phys.objects[0], c.phys.states[0]
+    code = oracle_code(loaded, obj, q, seed=0)
+    np.testing.assert_array_equal(code, oracle_code(loaded, obj, q, seed=0))
+    rng = np.random.default_rng(123)  # other samples than the fit's
+    surface = object_surface(obj, q)
+    signed = signed_distance(surface, sample_points(surface.mesh, 4000, SamplingConfig(), rng), SamplingConfig(), rng)
+    near = np.abs(signed.sdf) < 0.02
+
+    def error_mm(z: np.ndarray) -> float:
+        with torch.no_grad():
+            pred = loaded.decoder.sdf_only(
+                torch.as_tensor(z, dtype=torch.float32).expand(int(near.sum()), -1),
+                torch.full((int(near.sum()),), float(obj.normalize(q))),
+                torch.as_tensor(signed.points[near]),
+            ).numpy()
+        return float(np.mean(np.abs(pred - signed.sdf[near]))) * 1000
+
+    assert error_mm(code) < 0.8 * error_mm(np.zeros_like(code)), (error_mm(code), error_mm(np.zeros_like(code)))
+
+
 def test_a_test_set_with_a_training_object_is_refused(single_dataset, tmp_path, capsys):
     import torch
 
@@ -138,6 +184,10 @@ def test_resumed_run_equals_uninterrupted_and_the_report_is_complete(single_data
     assert all(r["sr_image"] == r["sr"] for r in rows if r.get("image_same_as_3d"))
     assert "SR img true" in md and "SR 3-D true" in md and "## Published protocol, for comparison only" in md
     assert all(g["sr_image"] is not None for g in report["groups"].values())
+    # the stage analysis's code oracle: measured exactly where the true pose alone still fails
+    learned = [r for r in rows if r["method"] == "centerart" and r["matched"]]
+    assert all((r["sr_gt_pose_code"] is None) == bool(r["sr"] or r["sr_gt_pose"]) for r in learned)
+    assert "shape code" in md and all("shape_code" in s["failures_by_stage"] for s in report["stages"].values())
 
     # "Killed" after one scene, then rerun: the second run evaluates only the missing scene.
     part = tmp_path / "part"

@@ -78,6 +78,10 @@ class EvalScenesConfig:
     """Chamfer / F-score of each matched object's decoded mesh (the slowest part: a mesh per object)."""
     ablation: bool = True
     """Stage analysis: re-run grasps with the true pose and joint state swapped in."""
+    code_oracle: bool = True
+    """Stage analysis: where the true pose still fails, also swap in a shape code fitted to the object's true surface
+    (``evaluation.code_oracle``: about 4 s per object on one core), which tells the encoder's shape code from the
+    decoder's grasps."""
     labels_per_state: int = 100
     """Ground-truth labels generated per object at its test state (RSR and the oracle)."""
     label_max_trials: int = 400
@@ -180,7 +184,7 @@ def scene_context(scene_dir: Path, labels_dir: Path, cfg: dict):
         poses = state_labels(obj, spec.joint_state, cache, cfg, f"{scene.scene_id}/{spec.name}")
         labels_world.append(scene.object_pose(k) @ poses if len(poses) else np.zeros((0, 4, 4)))
     phys = build_physics_scene(scene, objects)
-    return scene, SceneContext(phys, labels_world)
+    return scene, SceneContext(phys, labels_world, code_oracle=bool(cfg["ablation"] and cfg.get("code_oracle")))
 
 
 def view_inputs(scene_dir: Path, depth_modes) -> list:
@@ -261,7 +265,7 @@ def job_config(cfg: EvalScenesConfig) -> dict:
 
 #: Settings that change what a scene record holds; a rerun into the same --out must keep them.
 RECORD_SETTINGS = ("encoder", "decoder", "depth", "refine", "grasps", "shape_prior", "oracle", "baseline", "shape",
-                   "ablation", "labels_per_state", "label_max_trials", "seed")  # fmt: skip
+                   "ablation", "code_oracle", "labels_per_state", "label_max_trials", "seed")  # fmt: skip
 
 
 def check_same_settings(out: Path, jc: dict) -> None:

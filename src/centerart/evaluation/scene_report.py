@@ -204,16 +204,31 @@ def error_table(report: dict) -> list[str]:
 
 
 def stage_table(report: dict) -> list[str]:
-    lines = ["| group | objects | SR 3-D | SR 3-D with true pose + joint | SR img | SR img with true pose + joint | "
-             "missed (detection) | pose + joint | shape + grasp decoding | execution |",
-             "|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
-    for key, s in report["stages"].items():
+    """The stage analysis; with the code oracle (records that hold it) two more columns: SR img with a shape code
+    fitted to the object's true surface swapped in too, and the failures that code turns into successes."""
+    stages = report["stages"]
+    code = any("shape_code" in s["failures_by_stage"] for s in stages.values())
+    head = ["group", "objects", "SR 3-D", "SR 3-D with true pose + joint", "SR img", "SR img with true pose + joint"]
+    head += ["SR img with true pose + joint + fitted code"] if code else []
+    head += ["missed (detection)", "pose + joint"] + (["shape code"] if code else [])
+    head += ["grasp decoding (with the fitted code)" if code else "shape + grasp decoding", "execution"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for key, s in stages.items():
         f = s["failures_by_stage"]
-        lines.append(
-            f"| {group_label(report, key)} | {s['objects']} | {_f(s['sr'])} | {_f(s['sr_with_true_pose_and_joint'])} | "
-            f"{_f(s.get('sr_image'))} | {_f(s.get('sr_image_with_true_pose_and_joint'))} | "
-            f"{f['detection']} | {f['pose_and_joint']} | {f['shape_and_grasp_decoding']} | {f['execution']} |"
-        )
+        cells = [group_label(report, key), s["objects"], _f(s["sr"]), _f(s["sr_with_true_pose_and_joint"])]
+        cells += [_f(s.get("sr_image")), _f(s.get("sr_image_with_true_pose_and_joint"))]
+        cells += [_f(s.get("sr_image_with_true_pose_joint_and_code"))] if code else []
+        cells += [f["detection"], f["pose_and_joint"]] + ([f.get("shape_code", "-")] if code else [])
+        cells += [f["shape_and_grasp_decoding"], f["execution"]]
+        lines.append("| " + " | ".join(str(c) for c in cells) + " |")
+    if code:
+        from centerart.evaluation.code_oracle import ORACLE_CODE_FIT
+
+        lines += ["", "Shape code stage: where the true pose and joint still fail, a code fitted to the object's true "
+                  "surface at its test state (the decoder frozen, its code prior; SDF samples, steps and points per "
+                  f"step: {ORACLE_CODE_FIT}) is swapped in too (`evaluation/code_oracle.py`). 'shape code' counts "
+                  "the failures it turns into successes (the encoder's code lost them); 'grasp decoding' those that "
+                  "fail with it too (the decoder's grasps and their anchoring in the observed depth)."]  # fmt: skip
     return lines
 
 

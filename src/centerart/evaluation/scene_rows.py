@@ -46,6 +46,10 @@ class SceneContext:
     phys: PhysicsScene
     labels_world: list[np.ndarray]
     oracle: dict[int, dict] = field(default_factory=dict)
+    code_oracle: bool = False
+    """Stage analysis: also swap in a shape code fitted to the object's true surface (:mod:`.code_oracle`)."""
+    codes: dict[int, np.ndarray] = field(default_factory=dict)
+    """Those codes, per scene object (fitted once, shared by the scene's views and settings)."""
 
 
 @dataclass
@@ -196,16 +200,42 @@ def shape_row(ctx: SceneContext, v: ViewInput, k: int, obj: dict, pred) -> dict 
     return {"chamfer_l1_mm": m.chamfer_l1_mm, "fscore": m.fscore}
 
 
-def gt_pose_swap(predictor, v: ViewInput, pred, obj: dict) -> np.ndarray:
-    """The matched prediction's grasps with the true pose and joint state swapped in (shape code kept)."""
+def gt_pose_swap(predictor, v: ViewInput, pred, obj: dict, shape_code: np.ndarray | None = None) -> np.ndarray:
+    """The matched prediction's grasps with the true pose and joint state swapped in (shape code kept, or
+    ``shape_code`` swapped in too)."""
     joint = obj["joint"]
+    code = pred.shape_code if shape_code is None else shape_code
     det = Detection(
         score=pred.score, peak_uv=pred.peak_uv, camera_T_object=np.asarray(obj["camera_T_object"], float),
-        shape_code=pred.shape_code, joint_code=float(joint["state_normalized"]), joint_type=pred.joint_type,
+        shape_code=code, joint_code=float(joint["state_normalized"]), joint_type=pred.joint_type,
         joint_type_probability=pred.joint_type_probability, axis_direction=pred.axis_direction,
         axis_point=pred.axis_point, joint_state=float(joint["state"]), mask=pred.mask,
     )  # fmt: skip
     return predictor.predict_detection(det, v.rgb, v.depth, v.K).grasp_poses
+
+
+def gt_code_swap_sr(ctx: SceneContext, v: ViewInput, predictor, pred, obj: dict, already: bool) -> bool | None:
+    """SR of the top grasp with the true pose, joint state and a shape code fitted to the object's true surface
+    swapped in (:mod:`.code_oracle`); None where it is not measured: the code oracle is off, or the prediction
+    already succeeds as it is or with the true pose (``already``), so the stage analysis needs no code swap."""
+    if not ctx.code_oracle or already:
+        return None
+    from centerart.evaluation.code_oracle import oracle_code
+
+    k = obj["instance"] - 1
+    if k not in ctx.codes:
+        ctx.codes[k] = oracle_code(predictor.decoder, ctx.phys.objects[k], ctx.phys.states[k], seed=k)
+    return top_grasp_trial(ctx, v, k, gt_pose_swap(predictor, v, pred, obj, ctx.codes[k]))["sr"]
+
+
+def _image_ablation(ctx: SceneContext, v: ViewInput, predictor, pred, obj: dict, sr_image: bool) -> dict:
+    """The stage analysis's swaps for an image-associated prediction that is not the 3-D matched one."""
+    k = obj["instance"] - 1
+    gt_pose = top_grasp_trial(ctx, v, k, gt_pose_swap(predictor, v, pred, obj))["sr"]
+    out = {"sr_image_gt_pose": gt_pose}
+    if ctx.code_oracle:
+        out["sr_image_gt_pose_code"] = gt_code_swap_sr(ctx, v, predictor, pred, obj, sr_image or gt_pose)
+    return out
 
 
 def image_outcomes(ctx: SceneContext, v: ViewInput, predictor, preds, obj: dict, row: dict, i3d, i_img,
@@ -217,17 +247,22 @@ def image_outcomes(ctx: SceneContext, v: ViewInput, predictor, preds, obj: dict,
     if i_img is None:  # no peak in the object's mask: a miss, a failure like the 3-D miss
         out = {"image_matched": False, "image_same_as_3d": None, "sr_image": False, "sr_image_abort": "missed",
                "rsr_image": False}  # fmt: skip
-        return out | ({"sr_image_gt_pose": None} if ablation else {})
-    if i_img == i3d:
+        return out | ({f"sr_image_{key[3:]}": None for key in _swap_keys(ctx)} if ablation else {})
+    if i_img == i3d:  # the 3-D match's swaps, under the image association's names (sr_gt_pose -> sr_image_gt_pose)
         out = {**same_as_3d(row), "image_same_as_3d": True}
-        return out | ({"sr_image_gt_pose": row.get("sr_gt_pose")} if ablation else {})
+        return out | ({f"sr_image_{key[3:]}": row.get(key) for key in _swap_keys(ctx)} if ablation else {})
     pred = preds[i_img]
     trial = top_grasp_trial(ctx, v, k, pred.grasp_poses)
     out = {"image_matched": True, "image_same_as_3d": False, "sr_image": trial["sr"],
            "sr_image_abort": trial["sr_abort"], "rsr_image": trial["rsr"]}  # fmt: skip
     if ablation:
-        out["sr_image_gt_pose"] = top_grasp_trial(ctx, v, k, gt_pose_swap(predictor, v, pred, obj))["sr"]
+        out.update(_image_ablation(ctx, v, predictor, pred, obj, trial["sr"]))
     return out
+
+
+def _swap_keys(ctx: SceneContext) -> tuple[str, ...]:
+    """The stage analysis's keys of a row (the 3-D match's names)."""
+    return ("sr_gt_pose", "sr_gt_pose_code") if ctx.code_oracle else ("sr_gt_pose",)
 
 
 def learned_rows(ctx: SceneContext, v: ViewInput, predictor, method: str, shape: bool, ablation: bool, encoded=None):
@@ -254,6 +289,9 @@ def learned_rows(ctx: SceneContext, v: ViewInput, predictor, method: str, shape:
                 row["shape"] = shape_row(ctx, v, k, obj, pred)
             if ablation:  # only the top grasp's SR is used: one trial, not the variants
                 row["sr_gt_pose"] = top_grasp_trial(ctx, v, k, gt_pose_swap(predictor, v, pred, obj))["sr"]
+                if ctx.code_oracle:
+                    done = row["sr"] or row["sr_gt_pose"]
+                    row["sr_gt_pose_code"] = gt_code_swap_sr(ctx, v, predictor, pred, obj, done)
         row.update(image_outcomes(ctx, v, predictor, preds, obj, row, match.get(j), by_image.get(j), ablation))
         rows.append(row)
     return rows, image

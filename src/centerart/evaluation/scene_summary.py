@@ -151,15 +151,18 @@ def image_summary(images: list[dict]) -> dict:
     }
 
 
-STAGES = ("detection", "pose_and_joint", "shape_and_grasp_decoding", "execution")
+STAGES = ("detection", "pose_and_joint", "shape_code", "shape_and_grasp_decoding", "execution")
+"""``shape_code`` counts only in records with the code oracle (``sr_gt_pose_code``); there
+``shape_and_grasp_decoding`` is what fails even with a shape code fitted to the object: the decoder's grasps."""
 
 
 def stage_losses(rows: list[dict], oracle_rows: list[dict]) -> dict | None:
     """Where the learned method's failures come from, by swapping in ground truth one stage at a time:
-    detection (missed), pose and joint (the true pose and state make the grasp succeed), shape and grasp
+    detection (missed), pose and joint (the true pose and state make the grasp succeed), shape code (a code fitted
+    to the object's true surface makes it succeed too, where the records hold that swap), shape and grasp
     decoding (still failing with them, while a ground-truth label succeeds), execution (the label fails too).
-    The failures are those of the 3-D match; the image association's SR and its true-pose swap stand beside it
-    (None for records without them)."""
+    The failures are those of the 3-D match; the image association's SR and its swaps stand beside it (None for
+    records without them)."""
     if not rows or not any("sr_gt_pose" in r for r in rows):
         return None
     oracle = {(r["scene"], r["view"], r["instance"]): r["sr"] for r in oracle_rows}
@@ -171,27 +174,41 @@ def stage_losses(rows: list[dict], oracle_rows: list[dict]) -> dict | None:
             out["detection"] += 1
         elif r.get("sr_gt_pose"):
             out["pose_and_joint"] += 1
+        elif r.get("sr_gt_pose_code"):
+            out["shape_code"] += 1
         elif oracle.get((r["scene"], r["view"], r["instance"]), True):
             out["shape_and_grasp_decoding"] += 1
         else:
             out["execution"] += 1
     n = len(rows)
+    with_code = any("sr_gt_pose_code" in r for r in rows)  # misses hold no swap
     return {
         "objects": n,
         "sr": rate(rows, "sr"),
         "sr_with_true_pose_and_joint": float(np.mean([bool(r["sr"] or r.get("sr_gt_pose")) for r in rows])),
+        "sr_with_true_pose_joint_and_code": _any_rate(rows, ("sr", "sr_gt_pose", "sr_gt_pose_code"))
+        if with_code
+        else None,
         "sr_image": rate_if_recorded(rows, "sr_image"),
-        "sr_image_with_true_pose_and_joint": _swap_rate(rows, "sr_image", "sr_image_gt_pose"),
-        "failures_by_stage": {k: out[k] for k in STAGES},
+        "sr_image_with_true_pose_and_joint": _swap_rate(rows, "sr_image", ("sr_image_gt_pose",)),
+        "sr_image_with_true_pose_joint_and_code": _swap_rate(
+            rows, "sr_image", ("sr_image_gt_pose", "sr_image_gt_pose_code")
+        ),
+        "failures_by_stage": {k: out[k] for k in STAGES if k != "shape_code" or with_code},
         "failure_share_by_stage": {k: out[k] / n for k in out},
     }
 
 
-def _swap_rate(rows: list[dict], sr_key: str, swap_key: str) -> float | None:
-    """Share of rows that succeed as they are or with the true pose swapped in (a miss has no swap: None)."""
-    if not all(sr_key in r and swap_key in r for r in rows):
+def _swap_rate(rows: list[dict], sr_key: str, swap_keys: tuple[str, ...]) -> float | None:
+    """Share of rows that succeed as they are or with any of the swaps (None where a record lacks one)."""
+    if not all(sr_key in r and all(k in r for k in swap_keys) for r in rows):
         return None
-    return float(np.mean([bool(r[sr_key] or r[swap_key]) for r in rows]))
+    return _any_rate(rows, (sr_key, *swap_keys))
+
+
+def _any_rate(rows: list[dict], keys: tuple[str, ...]) -> float:
+    """Share of rows where any of ``keys`` is true (a missing or None value counts as false)."""
+    return float(np.mean([any(bool(r.get(k)) for k in keys) for r in rows]))
 
 
 def summarize_records(records: list[dict]) -> dict:
