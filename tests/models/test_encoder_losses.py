@@ -8,33 +8,10 @@ from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
 from centerart.models.encoder.network import OFFSET_SCALE_PX, RGBDEncoder, cell_centers
 
 
-def _batch(h=32, w=48):
-    K = torch.tensor([[50.0, 0, 23.5], [0, 50.0, 15.5], [0, 0, 1]])
-    cell_object = torch.full((1, 4, 6), -1, dtype=torch.long)
-    cell_object[0, 1:3, 2:4] = 0
-    m = 8
-    batch = {
-        "heatmap": torch.zeros(1, h, w),
-        "cell_object": cell_object,
-        "cell_weight": (cell_object >= 0).float() * 0.9,
-        "K": K[None],
-        "rotation": torch.eye(3).expand(1, m, 3, 3).clone(),
-        "translation": torch.tensor([0.1, -0.05, 2.0]).expand(1, m, 3).clone(),
-        "shape_code": torch.zeros(1, m, 32),
-        "shape_code_valid": torch.ones(1, m, dtype=torch.bool),
-        "joint_code": torch.full((1, m), 0.5),
-        "joint_type": torch.zeros(1, m, dtype=torch.long),
-        "axis_direction": torch.tensor([0.0, 1.0, 0.0]).expand(1, m, 3).clone(),
-        "axis_point_offset": torch.zeros(1, m, 3),
-        "joint_state": torch.full((1, m), 0.3),
-    }
-    return batch
-
-
-def test_background_cells_do_not_change_object_terms():
+def test_background_cells_do_not_change_object_terms(loss_batch):
     torch.manual_seed(0)
     enc = RGBDEncoder(PRESETS["tiny"])
-    batch = _batch()
+    batch = loss_batch
     out = enc(torch.rand(1, 3, 32, 48), torch.rand(1, 1, 32, 48) + 1)
     _, terms = encoder_loss(out, batch, EncoderLossConfig())
     bg = batch["cell_object"] < 0
@@ -45,9 +22,9 @@ def test_background_cells_do_not_change_object_terms():
         assert torch.allclose(terms[k], terms2[k]), k
 
 
-def test_perfect_pose_prediction_has_zero_pose_loss():
+def test_perfect_pose_prediction_has_zero_pose_loss(loss_batch):
     enc = RGBDEncoder(PRESETS["tiny"])
-    batch = _batch()
+    batch = loss_batch
     out = enc(torch.rand(1, 3, 32, 48), torch.rand(1, 1, 32, 48) + 1)
     t = batch["translation"][0, 0]
     K = batch["K"][0]
@@ -69,10 +46,10 @@ def _perfect_pose(out, batch):
     out.dense["center_depth"].data[:] = t[2]
 
 
-def test_decoupled_pose_loss_equals_published_when_either_error_is_zero():
+def test_decoupled_pose_loss_equals_published_when_either_error_is_zero(loss_batch):
     torch.manual_seed(0)
     enc = RGBDEncoder(PRESETS["tiny"])
-    batch = _batch()
+    batch = loss_batch
     out = enc(torch.rand(1, 3, 32, 48), torch.rand(1, 1, 32, 48) + 1)
     _perfect_pose(out, batch)
     published, decoupled = EncoderLossConfig(pose_decoupled=False), EncoderLossConfig(pose_decoupled=True)
@@ -85,11 +62,11 @@ def test_decoupled_pose_loss_equals_published_when_either_error_is_zero():
     assert float(a) > 0.05 and torch.allclose(a, b)
 
 
-def test_whitened_shape_loss_divides_each_dimension_by_its_code_spread():
+def test_whitened_shape_loss_divides_each_dimension_by_its_code_spread(loss_batch):
     from centerart.models.encoder.losses import code_scale
 
     enc = RGBDEncoder(PRESETS["tiny"])
-    batch = _batch()
+    batch = loss_batch
     out = enc(torch.rand(1, 3, 32, 48), torch.rand(1, 1, 32, 48) + 1)
     out.dense["shape_code"].data[:] = 0.1
     codes = {"a": np.full(32, -0.2, np.float32), "b": np.full(32, 0.2, np.float32)}

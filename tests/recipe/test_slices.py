@@ -213,3 +213,20 @@ def test_a_decoder_runs_learning_curve_is_in_mm_and_an_empty_ledger_is_one_error
     _write_ledger(tmp_path / "empty", [])
     with pytest.raises(CenterArtError, match="no slice in its ledger yet"):
         learning_curve(tmp_path / "empty")
+
+
+def test_a_run_with_the_decoded_shape_term_keeps_its_weight_and_builds_the_frozen_decoder(tmp_path):
+    """--shape-sdf: the plan's loss keeps the weight (old plans, without it, train as before: weight 0), and the
+    slice's loop gets the decoder's query points only then."""
+    from centerart.models.checkpoint import default_checkpoint, load_shape_codes
+    from centerart.models.encoder.losses import EncoderLossConfig
+    from centerart.recipe.slices import create_plan, decoded_shape_of, load_plan
+
+    plan = create_plan(tmp_path / "run", "small", None, shape_sdf=30.0)
+    assert load_plan(tmp_path / "run").loss["shape_sdf"] == 30.0
+    codes = dict(list(load_shape_codes(default_checkpoint()).items())[:3])
+    decoded = decoded_shape_of(plan, EncoderLossConfig.from_dict(plan.loss), codes)
+    assert decoded is not None and decoded.points.shape[:2] == (3, 512)
+    old = {k: v for k, v in plan.loss.items() if k != "shape_sdf"}
+    assert EncoderLossConfig.from_dict(old).shape_sdf == 0.0
+    assert decoded_shape_of(plan, EncoderLossConfig.from_dict(old), codes) is None

@@ -25,8 +25,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from centerart.errors import CenterArtError
 from centerart.geometry.transforms import rotation_angle_between
 from centerart.models.encoder.config import PRESETS
+from centerart.models.encoder.decoded_shape import DecodedShape
 from centerart.models.encoder.losses import EncoderLossConfig, code_scale, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder, cell_centers, object_translation, rotation_from_raw
 from centerart.training.encoder_data import EncoderViewDataset, collate, collect_views
@@ -79,6 +81,7 @@ def overfit_encoder(
     steps_per_epoch = max(1, len(items) // cfg.batch_size)
     sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: lr_factor(s, steps_per_epoch, cfg.steps))
     code_std = code_scale(codes) if codes else None
+    decoded = decoded_shape(cfg.loss, decoder, codes)
     gen = torch.Generator().manual_seed(cfg.seed)
     curve, order, train_seconds = [], [], 0.0
     for step in range(1, cfg.steps + 1):
@@ -88,7 +91,7 @@ def overfit_encoder(
         batch = collate([items[i] for i in order[: cfg.batch_size]])
         del order[: cfg.batch_size]
         model.train()
-        loss, terms, _ = _loss(model, batch, cfg.loss, code_std)
+        loss, terms, _ = _loss(model, batch, cfg.loss, code_std, decoded)
         opt.zero_grad()
         loss.backward()
         opt.step()
@@ -117,10 +120,20 @@ def overfit_encoder(
     return report, model
 
 
-def _loss(model, batch, loss_cfg, code_std):
+def _loss(model, batch, loss_cfg, code_std, decoded=None):
     out = model(batch["rgb"], batch["depth"])
-    loss, terms = encoder_loss(out, batch, loss_cfg, code_std)
+    loss, terms = encoder_loss(out, batch, loss_cfg, code_std, decoded)
     return loss, terms, out
+
+
+def decoded_shape(loss: EncoderLossConfig, loaded, codes: dict) -> DecodedShape | None:
+    """The decoded-shape term's frozen decoder and query points when ``loss.shape_sdf`` asks for it (else None);
+    ``loaded``: the LoadedDecoder whose ``codes`` are the targets."""
+    if loss.shape_sdf <= 0:
+        return None
+    if loaded is None or not codes:
+        raise CenterArtError("--loss shape_sdf needs the decoder whose codes are the targets (--decoder)")
+    return DecodedShape.build(loaded.decoder, codes, loaded.bounds)
 
 
 @torch.no_grad()

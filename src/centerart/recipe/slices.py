@@ -53,6 +53,9 @@ class SlicesNextConfig:
     ``RUN/decoder.pt``, instead of the preset's (the shipped ``sgdf_small.pt``). Either way the objects per
     category follow from the decoder's training and held-out objects. An --init trained against another decoder
     is then a warm start (ignored once the run exists)."""
+    shape_sdf: float = 0.0
+    """Weight of a new run's decoded-shape loss term (``EncoderLossConfig.shape_sdf``: the regressed code judged
+    through the frozen decoder; 0: none, as before it existed; ignored once the run exists)."""
     steps: int | None = None
     """Optimizer steps of this slice (default: the plan's)."""
     kitchen: int | None = None
@@ -84,7 +87,7 @@ class SlicesNextConfig:
             if getattr(self, name) is not None:
                 at_least(f"--{name.replace('_', '-')}", getattr(self, name), 0 if name != "steps" else 1)
         positive("--lr-scale", self.lr_scale)
-        for name in ("max_minutes", "loader_workers", "threads", "seed_block"):
+        for name in ("max_minutes", "loader_workers", "threads", "seed_block", "shape_sdf"):
             at_least(f"--{name.replace('_', '-')}", getattr(self, name), 0)
 
 
@@ -139,10 +142,11 @@ def run_kind(run: Path) -> str:
 
 
 def create_plan(
-    run: Path, preset: str, init: Path | None, seed_block: int = 0, decoder: Path | None = None
-) -> SlicePlan:
-    """A new run's plan from ``preset`` (its decoder replaced by a copy of ``decoder`` when given), the decoder
-    pinned by SHA-256, written to ``RUN/run.json``."""
+    run: Path, preset: str, init: Path | None, seed_block: int = 0, decoder: Path | None = None,
+    shape_sdf: float = 0.0,
+) -> SlicePlan:  # fmt: skip
+    """A new run's plan from ``preset`` (its decoder replaced by a copy of ``decoder`` when given, its loss's
+    decoded-shape weight set to ``shape_sdf``), the decoder pinned by SHA-256, written to ``RUN/run.json``."""
     from centerart.models.checkpoint_files import file_sha256
     from centerart.models.encoder.config import preset as encoder_preset
     from centerart.utils.atomic import atomic_write_json
@@ -160,6 +164,7 @@ def create_plan(
         plan.decoder = _copy_into_run(source, Path(run) / "decoder.pt")
     plan.decoder_sha256 = file_sha256(source)
     plan.seed_block = seed_block
+    plan.loss = {**plan.loss, "shape_sdf": float(shape_sdf)}
     if init is not None:
         if not Path(init).is_file():
             raise CenterArtError(f"--init {init}: no such encoder checkpoint")
@@ -397,7 +402,7 @@ def train_on(state, views, codes, plan: SlicePlan, settings: dict, start: int, o
     schedule = SliceSchedule(plan.lr, plan.warmup_steps, settings["lr_scale"])
     loss = EncoderLossConfig.from_dict(plan.loss)  # a plan saved before a loss field trains as it did then
     loop = StepLoop(batches, schedule, loss, code_scale(codes) if codes else None, options.get("workers", 1),
-                    options.get("max_seconds", 0.0))  # fmt: skip
+                    options.get("max_seconds", 0.0), decoded_shape_of(plan, loss, codes))  # fmt: skip
     bar = tqdm(total=steps, initial=start, desc=f"slice {k}", disable=not options.get("progress", True))
     last_save = [time.perf_counter()]
 
@@ -416,6 +421,17 @@ def train_on(state, views, codes, plan: SlicePlan, settings: dict, start: int, o
     return reached
 
 
+def decoded_shape_of(plan: SlicePlan, loss, codes: dict):
+    """The frozen decoder and query points of the decoded-shape term when the plan's loss weighs it (else None)."""
+    if loss.shape_sdf <= 0:
+        return None
+    from centerart.models.checkpoint import load_decoder
+    from centerart.models.encoder.decoded_shape import DecodedShape
+
+    loaded = load_decoder(checked_decoder(plan))
+    return DecodedShape.build(loaded.decoder, codes, loaded.bounds, seed=plan.seed)
+
+
 def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
     """Run (or resume, or finish writing) the next slice of ``cfg.run``; returns its ledger line, or a status
     dict ``{"stopped": step, "of": steps}`` when the slice stopped early."""
@@ -427,7 +443,7 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
     from centerart.utils.atomic import atomic_write_json
 
     run, work = Path(cfg.run), Path(cfg.work)
-    plan = load_plan(run) or create_plan(run, cfg.preset, cfg.init, cfg.seed_block, cfg.decoder)
+    plan = load_plan(run) or create_plan(run, cfg.preset, cfg.init, cfg.seed_block, cfg.decoder, cfg.shape_sdf)
     lines = read_ledger(run)
     k = len(lines) + 1
     work_slice = work / f"slice_{k:03d}"

@@ -32,6 +32,7 @@ from torch.utils.data import DataLoader, Dataset
 from centerart.errors import CenterArtError
 from centerart.models.checkpoint_files import check_fields, read_blob, write_blob
 from centerart.models.encoder.config import EncoderConfig, same_weights_layout
+from centerart.models.encoder.decoded_shape import DecodedShape
 from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
 from centerart.models.encoder.network import RGBDEncoder
 from centerart.training.encoder_data import EncoderViewDataset, collate
@@ -155,6 +156,8 @@ class StepLoop:
     workers: int = 1
     max_seconds: float = 0.0
     """Stop after this much time (0: no limit); the caller saves the state and a rerun resumes."""
+    decoded: DecodedShape | None = None
+    """The frozen decoder and query points of ``loss.shape_sdf`` (``decoded_shape.DecodedShape``)."""
 
 
 def run_steps(
@@ -172,7 +175,7 @@ def run_steps(
         for group in state.optimizer.param_groups:
             group["lr"] = loop.schedule.lr_at(state.step)
         out = state.encoder(batch["rgb"], batch["depth"])
-        loss, terms = encoder_loss(out, batch, loop.loss, loop.code_std)
+        loss, terms = encoder_loss(out, batch, loop.loss, loop.code_std, loop.decoded)
         state.optimizer.zero_grad(set_to_none=True)
         loss.backward()
         state.optimizer.step()

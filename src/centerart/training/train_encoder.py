@@ -77,6 +77,11 @@ class TrainEncoderConfig:
         for name in ("threads", "workers", "max_minutes"):
             at_least(f"--{name.replace('_', '-')}", getattr(self, name), 0)
         positive("--lr", self.lr)
+        if self.loss.shape_sdf > 0:
+            raise CenterArtError(
+                "--loss.shape-sdf: the decoded-shape term trains in sliced runs (centerart slices next --shape-sdf) "
+                "and in benchmarks/overfit_encoder.py, not in centerart train encoder"
+            )
 
     def encoder_config(self, code_dim: int) -> EncoderConfig:
         return replace(PRESETS[self.preset], **{**self.encoder_overrides, "code_dim": code_dim})

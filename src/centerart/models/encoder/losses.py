@@ -16,6 +16,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from centerart.models.encoder.decoded_shape import DecodedShape
 from centerart.models.encoder.network import EncoderOutput, cell_centers, object_translation, rotation_from_raw
 
 KEYPOINT_ARM_M = 0.1  # the published pose loss: t and t + 0.1 m along each rotated axis (keypoints()'s default)
@@ -45,6 +46,9 @@ class EncoderLossConfig:
     published form every tip also carries the translation error, and while that is centimetres the tips'
     gradient points along it, so the rotation gets little signal of its own. Same value for a perfect
     translation."""
+    shape_sdf: float = 0.0
+    """Weight of the decoded-shape term (:mod:`.decoded_shape`: the regressed code's SDF against the target code's,
+    through the frozen decoder, m); 0 leaves it out. It needs the decoder (``encoder_loss(decoded=...)``)."""
     shape_whiten: bool = False
     """Shape-code L1 on whitened codes: each dimension's error divided by the standard deviation of that
     dimension over the decoder's codes (:func:`code_scale`), so every dimension counts by how much it varies
@@ -104,20 +108,35 @@ def code_scale(codes: dict) -> torch.Tensor:
 
 
 def encoder_loss(
-    out: EncoderOutput, batch: dict, cfg: EncoderLossConfig, code_std: torch.Tensor | None = None
-) -> tuple[torch.Tensor, dict]:
+    out: EncoderOutput, batch: dict, cfg: EncoderLossConfig, code_std: torch.Tensor | None = None,
+    decoded: DecodedShape | None = None,
+) -> tuple[torch.Tensor, dict]:  # fmt: skip
     """Weighted total loss and its terms (unweighted, detached) for logging. ``code_std`` (code_dim,): the
-    per-dimension scale of the shape codes, required with ``cfg.shape_whiten`` (see :func:`code_scale`)."""
+    per-dimension scale of the shape codes, required with ``cfg.shape_whiten`` (see :func:`code_scale`);
+    ``decoded``: the frozen decoder and its query points, required with ``cfg.shape_sdf``."""
     if cfg.shape_whiten and code_std is None:
         raise ValueError("EncoderLossConfig.shape_whiten needs the codes' per-dimension scale (code_std)")
+    if cfg.shape_sdf > 0 and decoded is None:
+        raise ValueError("EncoderLossConfig.shape_sdf needs the decoder (decoded=DecodedShape.build(...))")
     terms = {"heatmap": F.mse_loss(out.heatmap, batch["heatmap"])}
     cells = gather_object_cells(out, batch, cfg.min_cell_weight)
     if cells is not None:
         terms.update(
             object_terms(cells, code_std if cfg.shape_whiten else None, cfg.pose_decoupled, cfg.keypoint_arm_m)
         )
+        if cfg.shape_sdf > 0:
+            terms["shape_sdf"] = shape_sdf_term(cells, decoded)
     total = sum(getattr(cfg, name) * value for name, value in terms.items())
     return total, {name: value.detach() for name, value in terms.items()}
+
+
+def shape_sdf_term(cells: dict, decoded: DecodedShape) -> torch.Tensor:
+    """The decoded-shape term over the object cells with a valid target code (zero when there are none)."""
+    p, t = cells["pred"], cells["target"]
+    valid = t["shape_code_valid"].bool()
+    if not bool(valid.any()):
+        return p["shape_code"].sum() * 0.0
+    return decoded.term(p["shape_code"][valid], t["shape_code"][valid], t["joint_code"][valid], cells["weight"][valid])
 
 
 def _weighted_mean(values: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
