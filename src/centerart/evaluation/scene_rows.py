@@ -216,9 +216,10 @@ def gt_pose_swap(predictor, v: ViewInput, pred, obj: dict, shape_code: np.ndarra
 
 def gt_code_swap_sr(ctx: SceneContext, v: ViewInput, predictor, pred, obj: dict, already: bool) -> bool | None:
     """SR of the top grasp with the true pose, joint state and a shape code fitted to the object's true surface
-    swapped in (:mod:`.code_oracle`); None where it is not measured: the code oracle is off, or the prediction
-    already succeeds as it is or with the true pose (``already``), so the stage analysis needs no code swap."""
-    if not ctx.code_oracle or already:
+    swapped in (:mod:`.code_oracle`; callers ask only with ``ctx.code_oracle`` on); None where it is not measured:
+    the prediction already succeeds as it is or with the true pose (``already``), so the stage analysis needs no
+    code swap."""
+    if already:
         return None
     from centerart.evaluation.code_oracle import oracle_code
 

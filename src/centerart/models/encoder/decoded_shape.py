@@ -25,6 +25,7 @@ import torch
 from scipy.stats import qmc
 
 from centerart.models.decoder import SGDFDecoder
+from centerart.models.losses import LossConfig
 
 
 @dataclass
@@ -35,7 +36,8 @@ class DecodedShape:
     decoder: SGDFDecoder
     codes: torch.Tensor
     points: torch.Tensor
-    clamp: float = 0.1
+    clamp: float = LossConfig.sdf_clamp
+    """m: the decoder's SDF is clamped to +-this, as in its training loss."""
     cells: int = 48
     """Object cells per batch that get the term (the heaviest: those nearest an object's centre)."""
     points_per_cell: int = 128
@@ -43,7 +45,7 @@ class DecodedShape:
     @classmethod
     def build(
         cls, decoder: SGDFDecoder, codes: dict, bounds: np.ndarray, points: int = 512, pool: int = 8192,
-        band_m: float = 0.04, clamp: float = 0.1, seed: int = 0,
+        band_m: float = 0.04, clamp: float = LossConfig.sdf_clamp, seed: int = 0,
     ) -> DecodedShape:  # fmt: skip
         """Freeze ``decoder`` (eval mode, no parameter gradients) and find ``points`` query points per code of
         ``codes`` (id -> (D,)) among a Sobol pool of ``pool`` points in ``bounds`` ((2, 3), m)."""
