@@ -466,7 +466,7 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
     views = slice_views(folders, work_slice, SliceData(**settings["data"]), settings["seeds"], decoder, cfg.workers)
     data_s = time.perf_counter() - t0
     if not lines and "start_validation" not in settings and val:  # where the run starts, for its learning curve
-        settings["start_validation"] = _validation(state, val, codes)
+        settings["start_validation"] = _validation(state, val, codes, decoder, work)
         atomic_write_json(saved, settings)
     options = {"workers": cfg.loader_workers, "max_seconds": cfg.max_minutes * 60, "stop_after": cfg.stop_after,
                "save": lambda s: _save_progress(s, work_slice), "progress": cfg.progress}  # fmt: skip
@@ -494,7 +494,7 @@ def _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder,
     from centerart.utils.manifest import code_version
 
     t0 = time.perf_counter()
-    figures = _validation(state, val, codes) if val else {}
+    figures = _validation(state, val, codes, decoder, work_slice.parent) if val else {}
     wall["validation"] = time.perf_counter() - t0
     state.meta = {"slices": settings["slice"]}
     staged = save_state(work_slice / STATE, state)
@@ -512,13 +512,24 @@ def _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder,
     return line
 
 
-def _validation(state, views: list[Path], codes: dict) -> dict:
-    """The fixed validation set's figures for ``state``'s encoder (rounded for the ledger)."""
+def _validation(state, views: list[Path], codes: dict, decoder: Path, work: Path) -> dict:
+    """The fixed validation set's figures for ``state``'s encoder (rounded for the ledger), with the regressed
+    codes' decoded-SDF error on its objects (``shape_sdf_mm_*``: the run's decoder, ``WORK/objects``)."""
     from centerart.training.encoder_data import EncoderViewDataset
     from centerart.training.slice_training import validate
 
-    figures = validate(state.encoder, EncoderViewDataset(views, state.encoder.config, codes, None), codes)
+    dataset = EncoderViewDataset(views, state.encoder.config, codes, None)
+    figures = validate(state.encoder, dataset, codes, shape_error=shape_judge(decoder, work / "objects"))
     return {k: round(v, 5) for k, v in figures.items()}
+
+
+def shape_judge(decoder: Path, objects: Path):
+    """The judge of the regressed shape codes on validation views (:mod:`~centerart.training.shape_validation`):
+    the run's frozen decoder and the objects' folders."""
+    from centerart.models.checkpoint import load_decoder
+    from centerart.training.shape_validation import HeldOutShapeError
+
+    return HeldOutShapeError(load_decoder(decoder).decoder, objects)
 
 
 def _threads() -> int:
@@ -578,7 +589,8 @@ def commit_folder(run: Path, message: str) -> str:
 
 # ---------------------------------------------------------------------------- status, replay
 #: Validation figures of the status table and the command's summary (keys of encoder_metrics.summarize).
-STATUS_COLUMNS = ("recall", "precision", "translation_cm_median", "rotation_deg_median", "joint_type_accuracy")
+STATUS_COLUMNS = ("recall", "precision", "translation_cm_median", "rotation_deg_median", "joint_type_accuracy",
+                  "shape_sdf_mm_median")  # fmt: skip
 
 
 def status_table(run: Path) -> str:
@@ -625,7 +637,7 @@ def learning_curve(run: Path) -> dict:
         lines = read_ledger(run)
         scales = {c: 1.0 for c in STATUS_COLUMNS}
         units = {"recall": "rate", "precision": "rate", "translation_cm_median": "cm",
-                 "rotation_deg_median": "deg", "joint_type_accuracy": "rate"}  # fmt: skip
+                 "rotation_deg_median": "deg", "joint_type_accuracy": "rate", "shape_sdf_mm_median": "mm"}  # fmt: skip
     if not lines:
         raise CenterArtError(f"{run}: no slice in its ledger yet, so no learning curve")
     columns = [c for c in scales if any(c in x["validation"] for x in lines)]

@@ -36,14 +36,17 @@ def batch_detections(out, batch: dict, config) -> list[list[Detection]]:
     return views
 
 
-def batch_view_metrics(out, batch: dict, config, codes: dict | None = None) -> list[dict]:
+def batch_view_metrics(out, batch: dict, config, codes: dict | None = None, shape_error=None) -> list[dict]:
     """:func:`view_metrics` of every view of an un-augmented batch (:func:`batch_detections`)."""
     detections = batch_detections(out, batch, config)
-    return [view_metrics(d, meta["labels"], codes) for d, meta in zip(detections, batch["meta"], strict=True)]
+    return [view_metrics(d, meta["labels"], codes, shape_error)
+            for d, meta in zip(detections, batch["meta"], strict=True)]  # fmt: skip
 
 
-def view_metrics(detections: list[Detection], labels: dict, codes: dict | None = None) -> dict:
-    """Counts and a list of per-object error rows (matched labelled objects) for one view."""
+def view_metrics(detections: list[Detection], labels: dict, codes: dict | None = None, shape_error=None) -> dict:
+    """Counts and a list of per-object error rows (matched labelled objects) for one view. ``shape_error``: an
+    optional judge of the regressed code (``training.shape_validation.HeldOutShapeError``), which adds
+    ``shape_sdf_mm`` to the rows it can judge."""
     objects = labels["objects"]
     true_t = np.array([np.asarray(o["camera_T_object"])[:3, 3] for o in objects]).reshape(-1, 3)
     pred_t = np.array([d.camera_T_object[:3, 3] for d in detections]).reshape(-1, 3)
@@ -57,7 +60,7 @@ def view_metrics(detections: list[Detection], labels: dict, codes: dict | None =
         "true_positives": int(sum(1 for _, j in pairs if visible[j])),
         "all_predictions": len(detections),
     }
-    rows = [object_errors(detections[i], objects[j], codes) for i, j in pairs]
+    rows = [object_errors(detections[i], objects[j], codes, shape_error) for i, j in pairs]
     for (i, j), row in zip(pairs, rows, strict=True):
         row["prediction"], row["label"] = i, j
     recall_rows = [{"category": o["category"], "found": j in matched_true} for j, o in enumerate(objects) if visible[j]]
@@ -80,7 +83,7 @@ def image_counts(detections, objects: list[dict], visible: list[bool]) -> dict:
     }
 
 
-def object_errors(det: Detection, obj: dict, codes: dict | None = None) -> dict:
+def object_errors(det: Detection, obj: dict, codes: dict | None = None, shape_error=None) -> dict:
     pose = np.asarray(obj["camera_T_object"], float)
     joint = obj["joint"]
     axis = np.asarray(joint["axis_direction_camera"], float)
@@ -100,6 +103,8 @@ def object_errors(det: Detection, obj: dict, codes: dict | None = None) -> dict:
     }
     if codes is not None and obj["object_id"] in codes:
         row["shape_code_l1"] = float(np.abs(det.shape_code - codes[obj["object_id"]]).mean())
+    if shape_error is not None and (mm := shape_error(det.shape_code, obj)) is not None:
+        row["shape_sdf_mm"] = mm
     return row
 
 
@@ -154,4 +159,6 @@ def summarize_rows(rows: list[dict]) -> dict:
     }
     if any("shape_code_l1" in r for r in rows):
         out["shape_code_l1_mean"] = float(np.mean([r["shape_code_l1"] for r in rows if "shape_code_l1" in r]))
+    if judged := [r["shape_sdf_mm"] for r in rows if "shape_sdf_mm" in r]:
+        out["shape_sdf_mm_median"], out["shape_sdf_mm_mean"] = float(np.median(judged)), float(np.mean(judged))
     return out

@@ -187,15 +187,24 @@ def run_steps(
     return done
 
 
+def validate(encoder: RGBDEncoder, dataset: EncoderViewDataset, codes: dict, batch_size: int = 8,
+             shape_error=None) -> dict:  # fmt: skip
+    """Detection and pose/joint/shape-code figures on un-augmented views (the one-run training's ``val/``), and the
+    decoded-SDF error of the regressed codes when ``shape_error`` judges them (:mod:`.shape_validation`)."""
+    summary = summarize(validation_results(encoder, dataset, codes, batch_size, shape_error))
+    return {k: float(v) for k, v in summary.items() if isinstance(v, (int, float))}
+
+
 @torch.no_grad()
-def validate(encoder: RGBDEncoder, dataset: EncoderViewDataset, codes: dict, batch_size: int = 8) -> dict:
-    """Detection and pose/joint/shape-code figures on un-augmented views (the one-run training's ``val/``)."""
+def validation_results(encoder: RGBDEncoder, dataset: EncoderViewDataset, codes: dict, batch_size: int = 8,
+                       shape_error=None) -> list[dict]:  # fmt: skip
+    """Every view's :func:`~centerart.training.encoder_metrics.view_metrics` (in the dataset's order), the encoder
+    in eval mode meanwhile."""
     encoder.eval()
     loader = DataLoader(dataset, batch_size=batch_size, shuffle=False, collate_fn=collate, num_workers=0)
     results: list[dict] = []
     for batch in loader:
         out = encoder(batch["rgb"], batch["depth"])
-        results += batch_view_metrics(out, batch, encoder.config, codes)
+        results += batch_view_metrics(out, batch, encoder.config, codes, shape_error)
     encoder.train()
-    summary = summarize(results)
-    return {k: float(v) for k, v in summary.items() if isinstance(v, (int, float))}
+    return results
