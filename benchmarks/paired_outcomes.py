@@ -5,7 +5,7 @@ pairs the rows of two ``centerart eval scenes`` outputs by (set, scene, view, de
 the objects both open, only the first opens, only the second opens, and gives the exact two-sided sign test on the
 discordant pairs (the chance that two equally good models differ at least this much). Prints JSON:
 
-    python benchmarks/paired_outcomes.py --a OUT_A --b OUT_B [--key sr_image] [--out paired.json]
+    python benchmarks/paired_outcomes.py --a OUT_A --b OUT_B [--key sr_image] [--ignore-method] [--out paired.json]
     # OUT_A, OUT_B: `centerart eval scenes` outputs over the same scenes (their records/); the labels should be
     # shared (copy OUT_A/labels into OUT_B before its run) so that only the models differ.
 """
@@ -22,8 +22,10 @@ from scipy.stats import binomtest
 from bench_report import emit
 
 
-def outcomes(eval_out: Path, key: str) -> dict[tuple, bool]:
-    """Every learned-method row of an evaluation's records: (set, scene, view, depth, method, instance) -> outcome."""
+def outcomes(eval_out: Path, key: str, with_method: bool = True) -> dict[tuple, bool]:
+    """Every learned-method row of an evaluation's records: (set, scene, view, depth, method, instance) -> outcome;
+    without the method when ``with_method`` is off (two inference settings, whose rows are named apart, e.g.
+    ``centerart[pose]`` and ``centerart+sdf[pose]``; each evaluation must then hold one learned method)."""
     files = sorted(eval_out.glob("records/*/*.json"))
     if not files:
         raise SystemExit(f"{eval_out}: no records/<set>/<scene>.json (expected a `centerart eval scenes` output)")
@@ -32,9 +34,8 @@ def outcomes(eval_out: Path, key: str) -> dict[tuple, bool]:
         set_name = f.parent.name.rsplit("-", 1)[0]
         for row in json.loads(f.read_text())["rows"]:
             if row["method"].startswith("centerart") and key in row:
-                rows[(set_name, row["scene"], row["view"], row["depth"], row["method"], row["instance"])] = bool(
-                    row[key]
-                )
+                method = row["method"] if with_method else "centerart"
+                rows[(set_name, row["scene"], row["view"], row["depth"], method, row["instance"])] = bool(row[key])
     return rows
 
 
@@ -65,10 +66,16 @@ def main() -> None:
     p.add_argument("--a", type=Path, required=True, help="first `centerart eval scenes` output")
     p.add_argument("--b", type=Path, required=True, help="second `centerart eval scenes` output")
     p.add_argument("--key", default="sr_image", help="row outcome to pair (sr_image: SR by image association)")
+    p.add_argument(
+        "--ignore-method",
+        action="store_true",
+        help="pair rows whatever their method is called (two inference settings, one method each)",
+    )
     p.add_argument("--out", type=Path, default=None)
     args = p.parse_args()
     report = {"a": str(args.a), "b": str(args.b), "key": args.key}
-    report |= paired_table(outcomes(args.a, args.key), outcomes(args.b, args.key))
+    named = not args.ignore_method
+    report |= paired_table(outcomes(args.a, args.key, named), outcomes(args.b, args.key, named))
     emit(report, args.out)
 
 
