@@ -1,0 +1,72 @@
+"""Closed-loop SR of several encoders on the same scenes, each paired against the first (views and objects).
+
+For choosing between checkpoints without the test scenes: each encoder is run through ``centerart eval scenes`` on
+the given scenes (stereo depth, ``centerart[pose]``, the headline SR only: no stage analysis, shapes, oracle or
+baseline, which makes a run about 0.4 s per single-object view on 2 cores once the labels exist), the first run's
+ground-truth labels copied into the others so that only the encoders differ; then every encoder's SR by image
+association per set, and its pairing with the first (``centerart.evaluation.paired``: the sign test on views and on
+distinct objects). Prints JSON:
+
+    PYTHONPATH=src:benchmarks python benchmarks/closed_loop_selection.py --scenes DEV/single --out OUT \
+        --decoder training_runs/encoder-small-102/decoder.pt --encoders slice1=S1.pt slice4=S4.pt [--workers 2]
+    # DEV/single: scenes of objects no model trained on and no test scene shows (benchmarks/results/
+    # eval_scenes_s24/README.md makes 400 of 200 new objects); OUT/<name>/ holds each evaluation (resumable)
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+from collections import Counter
+from pathlib import Path
+
+from bench_report import emit
+
+
+def evaluate(name: str, encoder: Path, args, first: Path | None) -> Path:
+    """``centerart eval scenes`` of one encoder into ``OUT/name`` (the first evaluation's labels copied in)."""
+    from centerart.evaluation.scene_eval import EvalScenesConfig, evaluate_scenes
+
+    out = args.out / name
+    if first is not None and (first / "labels").is_dir() and not (out / "labels").exists():
+        shutil.copytree(first / "labels", out / "labels")
+    evaluate_scenes(EvalScenesConfig(
+        scenes=tuple(args.scenes), out=out, encoder=encoder, decoder=args.decoder, depth=("realistic",),
+        grasps=("pose",), oracle=False, baseline=False, shape=False, ablation=False,
+        workers=args.workers, progress=False,
+    ))  # fmt: skip
+    return out
+
+
+def success_rates(outcomes: dict) -> dict:
+    """Per set: successes, object views, SR."""
+    views, wins = Counter(k[0] for k in outcomes), Counter(k[0] for k, ok in outcomes.items() if ok)
+    return {s: {"successes": wins[s], "views": n, "sr_image": round(wins[s] / n, 4)} for s, n in sorted(views.items())}
+
+
+def main() -> None:
+    from centerart.evaluation.paired import paired_table, read_outcomes
+
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--scenes", type=Path, nargs="+", required=True, help="scene folders (objects no model saw)")
+    p.add_argument("--encoders", nargs="+", required=True, help="NAME=ENCODER.pt; the first is the reference")
+    p.add_argument("--decoder", type=Path, default=None, help="the decoder all encoders regress codes of")
+    p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--workers", type=int, default=2)
+    args = p.parse_args()
+    named = [e.partition("=")[::2] for e in args.encoders]
+    report: dict = {"scenes": [str(s) for s in args.scenes], "decoder": str(args.decoder), "encoders": {}}
+    first = None
+    for name, path in named:
+        out = evaluate(name, Path(path), args, first)
+        outcomes = read_outcomes(out)
+        entry = {"file": path, "sets": success_rates(outcomes)}
+        if first is not None:
+            entry["paired_with_first"] = paired_table(read_outcomes(first), outcomes)["sets"]
+        report["encoders"][name] = entry
+        first = first or out
+    emit(report, args.out / "selection.json")
+
+
+if __name__ == "__main__":
+    main()
