@@ -1,5 +1,6 @@
-"""Two scene evaluations of the same scenes, paired object by object (``centerart.evaluation.paired``): which object
-views only one of them opens, with the sign test on views and on distinct objects. Prints JSON:
+"""Two scene evaluations of the same scenes, paired object by object, as JSON (``centerart eval compare`` prints the
+same as a table; ``centerart.evaluation.paired``): the object views only one of them opens, with the sign test on
+views and on distinct objects.
 
     python benchmarks/paired_outcomes.py --a OUT_A --b OUT_B [--key sr_image] [--ignore-method] [--out paired.json]
     # OUT_A, OUT_B: `centerart eval scenes` outputs over the same scenes (their records/); the labels should be
@@ -12,7 +13,7 @@ import argparse
 from pathlib import Path
 
 from bench_report import emit
-from centerart.evaluation.paired import paired_table, read_outcomes
+from centerart.evaluation.paired import CompareEvalsConfig, compare_evaluations
 
 
 def main() -> None:
@@ -20,17 +21,10 @@ def main() -> None:
     p.add_argument("--a", type=Path, required=True, help="first `centerart eval scenes` output")
     p.add_argument("--b", type=Path, required=True, help="second `centerart eval scenes` output")
     p.add_argument("--key", default="sr_image", help="row outcome to pair (sr_image: SR by image association)")
-    p.add_argument(
-        "--ignore-method",
-        action="store_true",
-        help="pair rows whatever their method is called (two inference settings, one method each)",
-    )
+    p.add_argument("--ignore-method", action="store_true", help="pair rows whatever their method is called")
     p.add_argument("--out", type=Path, default=None)
     args = p.parse_args()
-    report = {"a": str(args.a), "b": str(args.b), "key": args.key}
-    named = not args.ignore_method
-    report |= paired_table(read_outcomes(args.a, args.key, named), read_outcomes(args.b, args.key, named))
-    emit(report, args.out)
+    emit(compare_evaluations(CompareEvalsConfig(args.a, args.b, args.key, args.ignore_method)), args.out)
 
 
 if __name__ == "__main__":

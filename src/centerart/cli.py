@@ -110,6 +110,11 @@ COMMANDS: dict[str, dict[str, Command]] = {
             "centerart.commands:eval_scenes",
             "closed-loop evaluation: predicted grasps executed in physics on held-out scenes (SR, RSR, report)",
         ),
+        "compare": Command(
+            "centerart.evaluation.paired:CompareEvalsConfig",
+            "centerart.commands:eval_compare",
+            "pair two scene evaluations object by object: which objects only one opens, with sign tests",
+        ),
     },
     "predict": {
         "": Command(

@@ -150,6 +150,23 @@ def eval_decoder(cfg) -> None:
     print(f"wrote {Path(cfg.out) / 'report.json'} and {draw_decoder_eval(report, Path(cfg.out))}")
 
 
+def eval_compare(cfg) -> None:
+    from centerart.evaluation.paired import compare_evaluations
+
+    report = compare_evaluations(cfg)
+    print(f"{cfg.key}: A = {cfg.a}, B = {cfg.b}")
+    print("| set | object views | both | only A | only B | p (views) | objects | A better | B better | p (objects) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, c in sorted(report["sets"].items(), key=lambda kv: kv[0] == "all"):
+        print(
+            f"| {name} | {c['objects']} | {c['both']} | {c['only_a']} | {c['only_b']} | {c['sign_test_p']:.3f} | "
+            f"{c['distinct_objects']} | {c['objects_a_better']} | {c['objects_b_better']} | "
+            f"{c['object_sign_test_p']:.3f} |"
+        )
+    if cfg.out:
+        print(f"wrote {cfg.out}")
+
+
 def eval_scenes(cfg) -> None:
     from centerart.evaluation.scene_eval import evaluate_scenes
     from centerart.evaluation.scene_report import group_label

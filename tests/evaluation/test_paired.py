@@ -51,3 +51,16 @@ def test_many_views_of_one_object_are_not_many_objects(tmp_path):
 def test_a_folder_without_records_is_one_error_naming_it(tmp_path):
     with pytest.raises(CenterArtError, match=str(tmp_path)):
         read_outcomes(tmp_path)
+
+
+def test_the_cli_prints_the_table_and_refuses_bad_folders_in_one_line(tmp_path, capsys):
+    from centerart.cli import main
+
+    a = _write(tmp_path / "a", {("x",): [True, True], ("y",): [False]})
+    b = _write(tmp_path / "b", {("x",): [False, True], ("y",): [True]})
+    assert main(["eval", "compare", "--a", str(a), "--b", str(b), "--out", str(tmp_path / "t.json")]) == 0
+    assert "| single | 3 | 1 | 1 | 1 | 1.000 | 2 | 1 | 1 | 1.000 |" in capsys.readouterr().out
+    assert json.loads((tmp_path / "t.json").read_text())["sets"]["single"]["distinct_objects"] == 2
+    assert main(["eval", "compare", "--a", str(a), "--b", str(tmp_path / "nothing")]) == 2
+    err = capsys.readouterr().err
+    assert "nothing: no records" in err and "Traceback" not in err

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 from collections import defaultdict
+from dataclasses import dataclass
 from pathlib import Path
 
 from scipy.stats import binomtest
@@ -81,3 +82,34 @@ def by_object(a: dict[RowKey, bool], b: dict[RowKey, bool], common: list[RowKey]
         out[name] = {"distinct_objects": len(per_object), "objects_a_better": a_better, "objects_b_better": b_better,
                      "object_sign_test_p": round(sign_test_p(a_better, b_better), 4)}  # fmt: skip
     return out
+
+
+@dataclass
+class CompareEvalsConfig:
+    """Pair two closed-loop evaluations of the same scenes: per set, the object views only one of them opens and the
+    sign test on views and on distinct objects (read ``object_sign_test_p``)."""
+
+    a: Path
+    """First ``centerart eval scenes`` output (its records/)."""
+    b: Path
+    """Second ``centerart eval scenes`` output over the same scenes (best with the first one's labels copied in)."""
+    key: str = "sr_image"
+    """Row outcome to pair (sr_image: SR by image association; sr: the 3-D centre match)."""
+    ignore_method: bool = False
+    """Pair rows whatever their learned method is called (two inference settings, one method each)."""
+    out: Path | None = None
+    """Also write the table as JSON here."""
+
+
+def compare_evaluations(cfg: CompareEvalsConfig) -> dict:
+    """:func:`paired_table` of the two outputs, with their paths and the outcome key (written to ``cfg.out``)."""
+    from centerart.utils.atomic import atomic_write_json
+
+    named = not cfg.ignore_method
+    a, b = read_outcomes(cfg.a, cfg.key, named), read_outcomes(cfg.b, cfg.key, named)
+    if not set(a) & set(b):
+        raise CenterArtError(f"{cfg.a} and {cfg.b}: no row in common (other scenes, or other methods: --ignore-method)")
+    report = {"a": str(cfg.a), "b": str(cfg.b), "key": cfg.key, **paired_table(a, b)}
+    if cfg.out:
+        atomic_write_json(Path(cfg.out), report)
+    return report
