@@ -16,6 +16,8 @@ point handed to SAPIEN is therefore ``K[:2, 2] + 0.5`` so that rendered images f
 
 from __future__ import annotations
 
+import shutil
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +30,7 @@ from centerart.geometry.camera import OPENCV_T_SAPIEN, Intrinsics
 from centerart.geometry.transforms import apply_transform
 from centerart.scenes.description import MaterialSpec, SceneDescription, load_scene_object
 from centerart.scenes.textures import make_texture
+from centerart.scenes.visual_files import loadable_visual
 
 INSTANCE_BACKGROUND = 0
 #: Shadow map sizes (texels per side) of point (each cube face) and directional lights for images of at least
@@ -108,6 +111,7 @@ class SceneRenderer:
             sapien.render.set_ray_tracing_path_depth(4)
             sapien.render.set_ray_tracing_denoiser("none")  # OIDN needs CUDA here
         self._textures: dict[str, object] = {}
+        self._visuals: Path | None = None
         self.scene = None
         self.description: SceneDescription | None = None
         self.link_ids: dict[int, tuple[int, str]] = {}
@@ -225,6 +229,10 @@ class SceneRenderer:
             # and uploaded only to be removed again (a fifth of a kitchen's build time).
             for link_builder in builders[0].link_builders:
                 link_builder.visual_records = []
+        else:  # a real object's own visuals: meshes whose materials name missing images load from a mended copy
+            for record in (r for b in builders[0].link_builders for r in b.visual_records if r.type == "file"):
+                if record.filename.lower().endswith(".obj"):
+                    record.filename = str(loadable_visual(Path(record.filename), self._visual_cache()))
         art = builders[0].build()
         world_T_object = np.asarray(spec.world_T_object, float)
         art.set_root_pose(sapien.Pose(world_T_object @ obj.canonical_T_base))
@@ -409,6 +417,15 @@ class SceneRenderer:
             directional_lights=directions,
         )
 
+    def _visual_cache(self) -> Path:
+        """A temporary folder for mended visual meshes (:mod:`.visual_files`), removed by :meth:`close`."""
+        if self._visuals is None:
+            self._visuals = Path(tempfile.mkdtemp(prefix="centerart-visuals-"))
+        return self._visuals
+
     def close(self) -> None:
         self.scene = None
         self.description = None
+        if self._visuals is not None:
+            shutil.rmtree(self._visuals, ignore_errors=True)
+            self._visuals = None
