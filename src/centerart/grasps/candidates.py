@@ -106,6 +106,8 @@ def find_edge_sites(
     Surface points are drawn area-weighted over ``solid``, or, when ``pieces`` are given, in equal numbers from
     each piece (keeping those on the outside of ``solid``), so that a small handle is not drowned by a big door.
     """
+    if not pieces and solid.area <= 0:  # no solid moving geometry (a flat, zero-thickness PartNet door): no edge
+        return EdgeSites(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0))
     if pieces:
         per_piece = max(samples // len(pieces), 300)
         chunks = [trimesh.sample.sample_surface(m, per_piece, seed=int(rng.integers(2**31))) for m in pieces]
