@@ -27,14 +27,13 @@ from bench_report import emit
 
 def failed_rows(eval_out: Path):
     """(set name, row) of every failed top grasp on a multi-part generated object whose grasp was recorded."""
-    for f in sorted(eval_out.glob("records/*/*.json")):
-        set_name = f.parent.name.rsplit("-", 1)[0]
-        if set_name.startswith("real"):
+    from centerart.evaluation.paired import learned_rows
+
+    for set_name, row in learned_rows(eval_out):
+        if set_name.startswith("real") or row["visible_fraction"] < 0.3 or row["sr_image"]:
             continue
-        for row in json.loads(f.read_text())["rows"]:
-            if row["method"].startswith("centerart") and row["visible_fraction"] >= 0.3 and not row["sr_image"]:
-                if row.get("image_same_as_3d") and row.get("grasp_camera") is not None:
-                    yield set_name, row
+        if row.get("image_same_as_3d") and row.get("grasp_camera") is not None:
+            yield set_name, row
 
 
 def world_grasp(scene_dir: Path, row: dict) -> np.ndarray:

@@ -12,7 +12,6 @@ stage analysis's true-pose swap ``sr_image_gt_pose``), with the medians and a Ma
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
@@ -24,12 +23,9 @@ from bench_report import emit
 
 def eval_rows(eval_out: Path) -> dict[tuple[str, str], dict]:
     """(scene, object id) -> the learned method's row of a single-object evaluation's records."""
-    rows = {}
-    for f in sorted(eval_out.glob("records/*/*.json")):
-        for row in json.loads(f.read_text())["rows"]:
-            if row["method"].startswith("centerart"):
-                rows[(row["scene"], row["object_id"])] = row
-    return rows
+    from centerart.evaluation.paired import learned_rows
+
+    return {(row["scene"], row["object_id"]): row for _, row in learned_rows(eval_out)}
 
 
 def split(values: list[tuple[float, bool]]) -> dict:

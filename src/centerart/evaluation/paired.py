@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 from collections import defaultdict
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,22 +27,30 @@ RowKey = tuple[str, str, int, str, str, int, str]
 """(set, scene, view, depth mode, method, instance, object id) of one learned-method row."""
 
 
-def read_outcomes(eval_out: Path, key: str = "sr_image", with_method: bool = True) -> dict[RowKey, bool]:
-    """Every learned-method row of an evaluation's ``records/<set>/<scene>.json`` -> its outcome ``key``; with
-    ``with_method`` off the method is left out of the key (two inference settings, whose rows are named apart, e.g.
-    ``centerart[pose]`` and ``centerart+sdf[pose]``; each evaluation must then hold one learned method)."""
+def learned_rows(eval_out: Path) -> Iterator[tuple[str, dict]]:
+    """(set name, row) of every learned-method row of an evaluation's ``records/<set>/<scene>.json``, in file order;
+    the set name is the folder's without its path hash. An output without records is one error naming it."""
     files = sorted(Path(eval_out).glob("records/*/*.json"))
     if not files:
         raise CenterArtError(f"{eval_out}: no records/<set>/<scene>.json (expected a `centerart eval scenes` output)")
-    rows = {}
     for f in files:
         set_name = f.parent.name.rsplit("-", 1)[0]
         for row in json.loads(f.read_text())["rows"]:
-            if row["method"].startswith("centerart") and key in row:
-                method = row["method"] if with_method else "centerart"
-                rows[(set_name, row["scene"], row["view"], row["depth"], method, row["instance"], row["object_id"])] = (
-                    bool(row[key])
-                )
+            if row["method"].startswith("centerart"):
+                yield set_name, row
+
+
+def read_outcomes(eval_out: Path, key: str = "sr_image", with_method: bool = True) -> dict[RowKey, bool]:
+    """Every learned-method row of an evaluation (:func:`learned_rows`) -> its outcome ``key``; with ``with_method``
+    off the method is left out of the key (two inference settings, whose rows are named apart, e.g.
+    ``centerart[pose]`` and ``centerart+sdf[pose]``; each evaluation must then hold one learned method)."""
+    rows = {}
+    for set_name, row in learned_rows(eval_out):
+        if key in row:
+            method = row["method"] if with_method else "centerart"
+            rows[(set_name, row["scene"], row["view"], row["depth"], method, row["instance"], row["object_id"])] = bool(
+                row[key]
+            )
     return rows
 
 
