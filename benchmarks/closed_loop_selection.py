@@ -33,7 +33,7 @@ def evaluate(name: str, encoder: Path, args, first: Path | None) -> Path:
     evaluate_scenes(EvalScenesConfig(
         scenes=tuple(args.scenes), out=out, encoder=encoder, decoder=args.decoder, depth=("realistic",),
         grasps=("pose",), oracle=False, baseline=False, shape=False, ablation=False,
-        workers=args.workers, progress=False,
+        workers=args.workers,
     ))  # fmt: skip
     return out
 
