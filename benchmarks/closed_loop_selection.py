@@ -56,15 +56,16 @@ def main() -> None:
     args = p.parse_args()
     named = [e.partition("=")[::2] for e in args.encoders]
     report: dict = {"scenes": [str(s) for s in args.scenes], "decoder": str(args.decoder), "encoders": {}}
-    first = None
+    first, reference = None, None  # the first evaluation's folder (its labels) and outcomes, read once
     for name, path in named:
         out = evaluate(name, Path(path), args, first)
         outcomes = read_outcomes(out)
         entry = {"file": path, "sets": success_rates(outcomes)}
-        if first is not None:
-            entry["paired_with_first"] = paired_table(read_outcomes(first), outcomes)["sets"]
+        if reference is not None:
+            entry["paired_with_first"] = paired_table(reference, outcomes)["sets"]
+        else:
+            first, reference = out, outcomes
         report["encoders"][name] = entry
-        first = first or out
     emit(report, args.out / "selection.json")
 
 
