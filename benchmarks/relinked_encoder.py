@@ -26,6 +26,8 @@ def relink(encoder: Path, decoder: Path, out: Path) -> Path:
     """Write ``out``: ``encoder``'s weights and metadata, its decoder link set to ``decoder``'s file hash."""
     if not decoder.is_file():
         raise CenterArtError(f"{decoder}: no such decoder checkpoint")
+    if not out.parent.is_dir():
+        raise CenterArtError(f"--out {out}: folder {out.parent} does not exist")
     blob = read_blob(encoder, FORMAT, VERSION, "encoder")
     old = dict(blob.get("decoder") or {})
     blob["decoder"] = {**old, "file": decoder.name, "sha256": file_sha256(decoder), "relinked_from": old.get("sha256")}

@@ -34,6 +34,7 @@ from centerart.errors import CenterArtError
 from centerart.utils.atomic import atomic_write_json
 from centerart.utils.checks import at_least
 from centerart.utils.folders import check_output_folder
+from centerart.utils.torch_cpu import use_cpu_threads
 
 REFINE_METHODS = {"none": "centerart", "icp": "centerart+icp", "sdf": "centerart+sdf"}
 #: Grasp settings of the learned method (``inference.grasp_anchoring.LADDER``); ``full`` is the predictor's default.
@@ -241,9 +242,8 @@ def evaluate_scene(scene_dir: Path, labels_dir: Path, cfg: dict) -> dict:
 
 def _scene_job(job: tuple[str, str, str, dict]) -> dict:
     set_name, scene_dir, out, cfg = job
-    import torch
 
-    torch.set_num_threads(max(1, cfg["threads"]))
+    use_cpu_threads(max(1, cfg["threads"]))
     record_path = Path(out) / "records" / set_name / f"{Path(scene_dir).name}.json"
     if record_path.is_file():
         return {"skipped": True}

@@ -27,6 +27,7 @@ from centerart.errors import CenterArtError
 from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, check_run_files, read_ledger
 from centerart.recipe.slices import commit_folder, compare_replay, finish_pending, load_plan
 from centerart.utils.checks import at_least, between, positive
+from centerart.utils.torch_cpu import use_cpu_threads
 
 EXPORT = "decoder.pt"
 SAVE_EVERY_S = 300.0  # progress saved this often (and when a slice stops early)
@@ -298,7 +299,6 @@ def train_slice(run: _Run, state, settings: dict, cfg: DecoderSlicesConfig, unti
 def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
     """Run (or resume, or finish writing) the next slice of ``cfg.run``; returns its ledger line, or a status
     dict ``{"stopped": step, "of": steps}`` when the slice stopped early."""
-    import torch
 
     from centerart.utils.atomic import atomic_write_json
 
@@ -317,8 +317,7 @@ def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
         echo(f"slice {k}: its files were written by an interrupted call; ledger line added")
         return read_ledger(run_dir, DECODER_LINE_FIELDS)[-1]
     check_run_files(run_dir, lines)
-    if cfg.threads > 0:
-        torch.set_num_threads(cfg.threads)
+    use_cpu_threads(cfg.threads)
     t0 = time.perf_counter()
     objects_sha = prepare_data(plan, work, cfg.workers, cfg.progress)
     check_objects(lines, objects_sha, work)

@@ -29,6 +29,7 @@ from centerart.errors import CenterArtError
 from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, append_line, check_run_files, read_ledger
 from centerart.recipe.slice_plan import SliceData, SlicePlan, plan_preset, slice_seeds
 from centerart.utils.checks import at_least, positive
+from centerart.utils.torch_cpu import use_cpu_threads
 
 SAVE_EVERY_S = 300.0  # progress saved this often (and when a slice stops early)
 
@@ -437,8 +438,6 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
     dict ``{"stopped": step, "of": steps}`` when the slice stopped early."""
     import json
 
-    import torch
-
     from centerart.models.checkpoint import load_shape_codes
     from centerart.utils.atomic import atomic_write_json
 
@@ -452,8 +451,7 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
         return read_ledger(run)[-1]
     check_run_files(run, lines)
     decoder = checked_decoder(plan)
-    if cfg.threads > 0:
-        torch.set_num_threads(cfg.threads)
+    use_cpu_threads(cfg.threads)
     codes = load_shape_codes(decoder)
     config = encoder_config(plan, codes)
     state, start = start_state(plan, run, lines, work_slice, config)  # a state of another layout stops here
@@ -656,7 +654,6 @@ def learning_curve(run: Path) -> dict:
 
 def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
     """Remake the run's state from its plan and ledger (same seeds, same steps) and compare the weights."""
-    import torch
 
     from centerart.models.checkpoint import load_shape_codes
     from centerart.training.slice_training import load_state
@@ -665,8 +662,7 @@ def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
     if run_kind(run) == "decoder":
         from centerart.recipe.decoder_slices import replay_decoder
 
-        if cfg.threads > 0:
-            torch.set_num_threads(cfg.threads)
+        use_cpu_threads(cfg.threads)
         return replay_decoder(run, work, cfg.workers, cfg.tolerance, cfg.progress, echo)
     plan = load_plan(run)
     if plan is None:
@@ -675,8 +671,7 @@ def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
     target = check_run_files(run, lines)
     if target is None:
         raise CenterArtError(f"{run}: no slice to replay yet")
-    if cfg.threads > 0:
-        torch.set_num_threads(cfg.threads)
+    use_cpu_threads(cfg.threads)
     decoder = checked_decoder(plan)
     folders = prepare_objects(plan, work, decoder, cfg.workers)
     codes = load_shape_codes(decoder)

@@ -37,6 +37,7 @@ from centerart.utils.atomic import atomic_write_json
 from centerart.utils.checks import at_least, between, positive
 from centerart.utils.folders import check_output_folder, folder_lock
 from centerart.utils.parallel import launcher_rank
+from centerart.utils.torch_cpu import use_cpu_threads
 
 if TYPE_CHECKING:
     from centerart.sdf.samples import StateData
@@ -139,8 +140,7 @@ def train_decoder(cfg: TrainDecoderConfig) -> dict:
     if not Path(cfg.data).is_dir():
         raise CenterArtError(f"{cfg.data}: SDF data folder not found")
     out = check_output_folder(cfg.out)
-    if cfg.threads > 0:
-        torch.set_num_threads(cfg.threads)
+    use_cpu_threads(cfg.threads)
     L.seed_everything(cfg.seed, workers=True, verbose=False)
     data = load_split_data(cfg)
     dcfg, lcfg = cfg.decoder_config(), cfg.loss_config()

@@ -32,6 +32,7 @@ from centerart.utils.atomic import atomic_write_json
 from centerart.utils.checks import at_least, positive
 from centerart.utils.folders import check_output_folder, folder_lock
 from centerart.utils.parallel import launcher_rank
+from centerart.utils.torch_cpu import use_cpu_threads
 
 
 @dataclass
@@ -162,8 +163,7 @@ def train_encoder(cfg: TrainEncoderConfig) -> dict:
     decoder_path = Path(cfg.decoder) if cfg.decoder is not None else default_checkpoint()
     codes = load_shape_codes(decoder_path)
     out = check_output_folder(cfg.out)
-    if cfg.threads > 0:
-        torch.set_num_threads(cfg.threads)
+    use_cpu_threads(cfg.threads)
     L.seed_everything(cfg.seed, workers=True, verbose=False)
     enc_cfg = cfg.encoder_config(code_dim=len(next(iter(codes.values()))))
     train_loader, val_loader = _loaders(cfg, enc_cfg, codes)
