@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import tyro
 
 from centerart.errors import CenterArtError
+from centerart.utils.torch_cpu import flush_denormals
 
 
 @dataclass(frozen=True)
@@ -204,6 +205,7 @@ def main(argv: list[str] | None = None) -> int:
         # Parsing inside the try: configs check their values in __post_init__ and raise CenterArtError there.
         default = _resolve(cmd.default)(argv) if cmd.default else None
         cfg = tyro.cli(_resolve(cmd.config), args=argv, prog=prog, description=cmd.help, default=default)
+        flush_denormals()  # before any torch work starts threads (utils/torch_cpu.py says why)
         _resolve(cmd.run)(cfg)
     except CenterArtError as err:
         print(f"centerart: error: {err}", file=sys.stderr)
