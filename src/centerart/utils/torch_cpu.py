@@ -2,7 +2,7 @@
 
 Why flush denormals: float32 values below 1.2e-38 (denormals) are computed by x86 cores in microcode, 10-100x
 slower than normal numbers. Trained weights hold them: a weight-normalised decoder's direction vectors after
-4,800 steps had 1-3 % denormal entries per layer, and one training step of it took 3x longer than with them read
+4,800 steps had 0.7-3 % denormal entries per layer, and a training step of it took 2-3x longer than with them read
 as zero (``benchmarks/results/denormals/``). torch on the CPU keeps them unless told otherwise. Reading them as zero
 moves no figure that is reported (they are below 1e-38, the weights around 1e-2; measured there).
 
