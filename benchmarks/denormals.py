@@ -16,8 +16,6 @@ import sys
 import time
 from pathlib import Path
 
-FLOAT32_TINY = 1.1754944e-38  # smallest normal float32
-
 
 def load_decoder(state_path: Path):
     import torch
@@ -34,8 +32,12 @@ def load_decoder(state_path: Path):
 def denormal_counts(state: dict) -> dict:
     """Per floating-point tensor of the weights and the optimizer state: (denormal entries, entries)."""
 
+    import torch
+
+    tiny = torch.finfo(torch.float32).tiny  # the smallest normal float32, 1.18e-38
+
     def count(t):
-        return int(((t != 0) & (t.abs() < FLOAT32_TINY)).sum())
+        return int(((t != 0) & (t.abs() < tiny)).sum())
 
     out = {k: [count(v), v.numel()] for k, v in state["state_dict"].items() if v.is_floating_point()}
     for i, s in state.get("optimizer", {}).get("state", {}).items():

@@ -242,7 +242,6 @@ def evaluate_scene(scene_dir: Path, labels_dir: Path, cfg: dict) -> dict:
 
 def _scene_job(job: tuple[str, str, str, dict]) -> dict:
     set_name, scene_dir, out, cfg = job
-
     use_cpu_threads(max(1, cfg["threads"]))
     record_path = Path(out) / "records" / set_name / f"{Path(scene_dir).name}.json"
     if record_path.is_file():

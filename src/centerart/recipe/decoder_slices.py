@@ -299,7 +299,6 @@ def train_slice(run: _Run, state, settings: dict, cfg: DecoderSlicesConfig, unti
 def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
     """Run (or resume, or finish writing) the next slice of ``cfg.run``; returns its ledger line, or a status
     dict ``{"stopped": step, "of": steps}`` when the slice stopped early."""
-
     from centerart.utils.atomic import atomic_write_json
 
     run_dir, work = Path(cfg.run), Path(cfg.work)

@@ -654,7 +654,6 @@ def learning_curve(run: Path) -> dict:
 
 def replay(cfg: SlicesReplayConfig, echo=print) -> dict:
     """Remake the run's state from its plan and ledger (same seeds, same steps) and compare the weights."""
-
     from centerart.models.checkpoint import load_shape_codes
     from centerart.training.slice_training import load_state
 
