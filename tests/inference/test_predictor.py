@@ -1,7 +1,6 @@
 """The predictor with the shipped weights: the bundled example end to end through the CLI, and a rendered
 kitchen of training objects seen from two cameras (detections, poses, joints, grasps, frame consistency)."""
 
-import copy
 import json
 
 import numpy as np
@@ -166,31 +165,29 @@ def test_top_grasp_lies_on_the_moving_part_given_the_true_pose(predictor, traini
     own ranking (``grasp_critic=False``): with the shipped grasp critic, the training fridge ajar at 0.70 gets
     three grasps 1-2 cm off the field's target (offset, which the critic learned to ignore on new objects) that
     miss its door, in both views (benchmarks/results/grasp_critic/README.md)."""
-    from dataclasses import replace
-
     import trimesh
 
+    from centerart.errors import CenterArtError
+    from centerart.evaluation.code_oracle import true_detection
     from centerart.grasps.gripper import FINGER_PAD_LENGTH, FINGER_WIDTH, FINGERTIP_BEYOND_TCP, MAX_OPENING
     from centerart.inference.grasp_anchoring import AnchoringConfig
-    from centerart.models.encoder.readout import Detection
+    from centerart.inference.predictor import PredictorConfig
     from centerart.scenes.description import SceneDescription, load_scene_object
 
     top_closes = []
-    own_ranking = copy.copy(predictor)
-    # The decoder's proposal (anchoring off: it re-ranks by the observation, tests/inference/test_grasp_anchoring).
-    own_ranking.config = replace(predictor.config, grasp_critic=False, anchoring=AnchoringConfig(enabled=False))
+    # The decoder's proposal (anchoring off: it re-ranks by the observation, tests/inference/test_grasp_anchoring),
+    # decoded with no encoder: the detection is given.
+    own_ranking = Predictor.without_encoder(
+        config=PredictorConfig(grasp_critic=False, anchoring=AnchoringConfig(enabled=False))
+    )
     for view_dir in list_views(training_kitchen / "scenes"):
         v = load_view(view_dir)
+        with pytest.raises(CenterArtError, match="no encoder"):
+            own_ranking.predict(v.rgb, v.depth_realistic, np.asarray(v.labels["K"]))
         scene = SceneDescription.load(view_dir.parent.parent / "scene.json")
         for o in (o for o in v.labels["objects"] if o["visible_fraction"] >= 0.3):
             k, joint, pose = o["instance"] - 1, o["joint"], np.asarray(o["camera_T_object"])
-            code = predictor.decoder.codes[o["object_id"]]
-            axis_dir, axis_pt = np.asarray(joint["axis_direction_camera"]), np.asarray(joint["axis_origin_camera"])
-            det = Detection(
-                score=1.0, peak_uv=np.zeros(2), camera_T_object=pose, shape_code=code,
-                joint_code=joint["state_normalized"], joint_type=joint["type"], joint_type_probability=1.0,
-                axis_direction=axis_dir, axis_point=axis_pt, joint_state=joint["state"], mask=v.instances == k + 1,
-            )  # fmt: skip
+            det = true_detection(o, v.instances, predictor.decoder.codes[o["object_id"]])
             pred = own_ranking.predict_detection(det, v.rgb, v.depth_realistic, np.asarray(v.labels["K"]))
             assert len(pred.grasp_poses) > 0, o["object_id"]
             moving = load_scene_object(scene.objects[k]).moving_mesh(joint["state"])

@@ -20,6 +20,7 @@ import numpy as np
 
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.evaluation.decoder_eval import fitted_code
+from centerart.models.encoder.readout import Detection
 from centerart.sdf.sampling import SamplingConfig, sample_points, signed_distance
 from centerart.sdf.surface import object_surface
 
@@ -45,3 +46,19 @@ def oracle_code(loaded, obj: ArticulatedObject, q: float, seed: int) -> np.ndarr
     signed = signed_distance(surface, points, sampling, rng)
     state = _StateSamples(float(obj.normalize(q)), signed.points, signed.sdf)
     return fitted_code(loaded, [state], ORACLE_CODE_FIT["steps"], seed, ORACLE_CODE_FIT["points_per_step"])
+
+
+def true_detection(obj: dict, instances: np.ndarray, shape_code: np.ndarray) -> Detection:
+    """A detection of view label ``obj`` (``labels.json``, OpenCV camera frame, m, rad) with everything but the
+    shape code true: pose, joint type, state and axis, and the object's visible mask from ``instances`` (H, W).
+    Decoded with ``Predictor.predict_detection``, it measures a decoder (and the grasp anchoring) in closed loop
+    with no encoder error."""
+    joint = obj["joint"]
+    return Detection(
+        score=1.0, peak_uv=np.zeros(2), camera_T_object=np.asarray(obj["camera_T_object"], float),
+        shape_code=np.asarray(shape_code, np.float32), joint_code=float(joint["state_normalized"]),
+        joint_type=joint["type"], joint_type_probability=1.0,
+        axis_direction=np.asarray(joint["axis_direction_camera"], float),
+        axis_point=np.asarray(joint["axis_origin_camera"], float), joint_state=float(joint["state"]),
+        mask=instances == obj["instance"],
+    )  # fmt: skip

@@ -154,13 +154,14 @@ def _anchoring_fields(anchored: AnchoredGrasps | None) -> dict:
 class Predictor:
     """Encoder + decoder. ``Predictor()`` loads the shipped weights; pass checkpoint paths to use your own."""
 
-    def __init__(self, encoder_ckpt=None, decoder_ckpt=None, device: str = "cpu", config=None):
+    def __init__(self, encoder_ckpt=None, decoder_ckpt=None, device: str = "cpu", config=None, *, encoder=True):
+        """``encoder=False``: no encoder is loaded (see :meth:`without_encoder`)."""
         from centerart.models.checkpoint import default_checkpoint, load_decoder
         from centerart.models.encoder.checkpoint import load_encoder
 
         self.device = torch.device(device)
         decoder_ckpt = Path(decoder_ckpt) if decoder_ckpt is not None else default_checkpoint()
-        self.encoder = load_encoder(encoder_ckpt, decoder_path=decoder_ckpt, device=self.device)
+        self.encoder = load_encoder(encoder_ckpt, decoder_path=decoder_ckpt, device=self.device) if encoder else None
         self.decoder = load_decoder(decoder_ckpt, device=self.device)
         self.config = config or PredictorConfig()
         self.timing: dict[str, float] = {}
@@ -185,6 +186,13 @@ class Predictor:
     def from_pretrained(cls, device: str = "cpu", config: PredictorConfig | None = None) -> Predictor:
         return cls(None, None, device, config)
 
+    @classmethod
+    def without_encoder(cls, decoder_ckpt=None, device: str = "cpu", config: PredictorConfig | None = None):
+        """A predictor that only decodes given detections (:meth:`predict_detection`): e.g. a detection with the
+        true pose and joint and a code fitted to the object, to measure a decoder in closed loop before any
+        encoder is trained against its codes. :meth:`predict` and :meth:`encode` refuse."""
+        return cls(None, decoder_ckpt, device, config, encoder=False)
+
     def predict(self, rgb: np.ndarray, depth: np.ndarray, K, encoded=None, gravity=None) -> list[ObjectPrediction]:
         """Objects in one RGB (H, W, 3) uint8 image with depth (H, W) in metres (holes 0 / NaN) and 3x3 ``K``.
         ``encoded``: this image's :meth:`encode` result, to reuse one encoder pass across predictor settings.
@@ -205,6 +213,8 @@ class Predictor:
         :meth:`predict` decodes; same inputs as :meth:`predict`."""
         from centerart.models.encoder.detect import detect_objects
 
+        if self.encoder is None:
+            raise CenterArtError("this Predictor has no encoder (Predictor.without_encoder): use predict_detection")
         camera, depth = self._checked(rgb, depth, K)
         t0 = time.perf_counter()
         encoded = detect_objects(self.encoder.encoder, rgb, depth, camera, self.config.peak_threshold)

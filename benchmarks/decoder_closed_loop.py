@@ -1,0 +1,200 @@
+"""Closed-loop SR of decoders with no encoder: true pose, joint and mask, a code fitted to the true surface.
+
+Every object of the scenes is given with its true pose, joint and visible mask and a shape code fitted to its true
+surface; each decoder decodes, anchors and ranks its grasps, the top one is executed, and every decoder is paired
+against the first.
+
+Which decoder should an encoder be trained against? An encoder run costs several sessions, and an encoder's codes
+belong to one decoder, so ``centerart eval scenes`` cannot compare decoders before that is paid. This runs the code
+oracle of the stage analysis (``evaluation/code_oracle.py``: the decoder frozen, a code fitted to the object's
+surface at its scene state) through the predictor's own decoding, anchoring and ranking
+(``Predictor.without_encoder``, ``predict_detection``), executes the top grasp in the scene's physics, and pairs
+the decoders' outcomes object by object (``centerart.evaluation.paired``: sign test on views and on distinct
+objects). It is an upper bound for what an encoder could get from each decoder, not a method. Prints JSON:
+
+    PYTHONPATH=src:benchmarks python benchmarks/decoder_closed_loop.py --scenes DEV/single --out OUT \\
+        --decoders shipped=src/centerart/weights/sgdf_small.pt \\
+        reg=training_runs/decoder-small-102-paper-reg/decoder.pt \\
+        [--labels-from EVAL_OUT] [--grasps pose] [--depth realistic] [--max-scenes N] [--workers 2]
+    # DEV/single: scenes of objects no decoder trained on (refused otherwise); EVAL_OUT: a `centerart eval scenes`
+    # output on the same scenes whose cached ground-truth labels are reused (else they are generated into OUT);
+    # OUT/records/<set>/<scene>.json: one record per scene (a rerun skips it: resumable)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+from bench_report import emit
+from centerart.inference.grasp_anchoring import LADDER
+
+_PREDICTORS: dict = {}
+
+
+def predictor(decoder: str, grasps: str):
+    """The encoder-less predictor of one decoder and grasp setting (critics off: no run decoder has one), cached."""
+    from centerart.inference.grasp_anchoring import ladder_predictor_settings
+    from centerart.inference.predictor import Predictor, PredictorConfig
+
+    if (decoder, grasps) not in _PREDICTORS:
+        config = PredictorConfig(grasp_critic=False, **ladder_predictor_settings(grasps))
+        _PREDICTORS[(decoder, grasps)] = Predictor.without_encoder(decoder, config=config)
+    return _PREDICTORS[(decoder, grasps)]
+
+
+def object_rows(ctx, v, decoders: list[tuple[str, str]], grasps: str, codes: dict) -> list[dict]:
+    """One row per visible object of view ``v``: each decoder's top-grasp outcome (SR, abort word) and code fit."""
+    from centerart.evaluation.code_oracle import oracle_code, true_detection
+    from centerart.evaluation.scene_rows import top_grasp_trial
+    from centerart.geometry.gravity import gravity_from_world_T_camera
+
+    rows = []
+    for _, obj in v.ground_truth():
+        k = obj["instance"] - 1
+        row = {"scene": v.scene, "view": v.view, "depth": v.depth_mode, "instance": k, "object_id": obj["object_id"],
+               "category": obj["category"], "state_normalized": obj["joint"]["state_normalized"]}  # fmt: skip
+        for name, path in decoders:
+            p = predictor(path, grasps)
+            p.gravity = gravity_from_world_T_camera(v.world_T_camera)  # as the scene evaluation gives it (TF)
+            if (name, k) not in codes:
+                codes[(name, k)] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], seed=k)
+            pred = p.predict_detection(true_detection(obj, v.instances, codes[(name, k)]), v.rgb, v.depth, v.K)
+            trial = top_grasp_trial(ctx, v, k, pred.grasp_poses)
+            row[name] = {"sr": bool(trial["sr"]), "abort": trial["sr_abort"], "rsr": bool(trial["rsr"])}
+        rows.append(row)
+    return rows
+
+
+def scene_job(job: tuple) -> dict:
+    """Every row of one scene into OUT/records/<set>/<scene>.json (skipped when it is there: resume)."""
+    from centerart.evaluation.scene_eval import scene_context, view_inputs
+    from centerart.utils.atomic import atomic_write_json
+    from centerart.utils.torch_cpu import flush_denormals, use_cpu_threads
+
+    set_name, scene_dir, out, decoders, args = job
+    flush_denormals()
+    use_cpu_threads(1)
+    record = Path(out) / "records" / set_name / f"{Path(scene_dir).name}.json"
+    if record.is_file():
+        return {"skipped": True}
+    started = time.perf_counter()
+    _, ctx = scene_context(Path(scene_dir), Path(out) / "labels" / set_name, args)
+    try:
+        rows, codes = [], {}
+        for v in view_inputs(Path(scene_dir), args["depth"]):
+            rows += object_rows(ctx, v, decoders, args["grasps"], codes)
+    finally:
+        ctx.phys.close()
+    atomic_write_json(record, {"scene": Path(scene_dir).name, "set": set_name, "rows": rows,
+                               "seconds": round(time.perf_counter() - started, 2)})  # fmt: skip
+    return {"skipped": False}
+
+
+def check_held_out(folders: list[Path], sets: dict, decoders: list[tuple[str, str]]) -> None:
+    """Refuse scenes that show an object any of the decoders trained on."""
+    from centerart.evaluation.heldout import check_held_out as check
+    from centerart.evaluation.heldout import checkpoint_training_objects
+    from centerart.evaluation.testset import describe_set
+
+    trained = [checkpoint_training_objects(Path(path), "decoder") for _, path in decoders]
+    for folder, dirs in zip(folders, sets.values(), strict=True):
+        info = describe_set(folder, dirs)
+        check({o["object_id"]: o["fingerprint"] for o in info["objects"].values()}, trained, str(folder))
+
+
+def outcomes(out: Path, name: str) -> dict:
+    """(set, scene, view, depth, method, instance, object) -> SR of decoder ``name``, as ``evaluation.paired``
+    keys its rows."""
+    rows = {}
+    for path in sorted((out / "records").glob("*/*.json")):
+        rec = json.loads(path.read_text())
+        for r in rec["rows"]:
+            rows[(rec["set"], r["scene"], r["view"], r["depth"], "oracle-code", r["instance"], r["object_id"])] = r[
+                name
+            ]["sr"]
+    return rows
+
+
+def summary(out: Path, decoders: list[tuple[str, str]]) -> dict:
+    """Each decoder's SR (overall and per category) and its pairing with the first."""
+    from centerart.evaluation.paired import paired_table
+
+    rows = [r for p in sorted((out / "records").glob("*/*.json")) for r in json.loads(p.read_text())["rows"]]
+    first = outcomes(out, decoders[0][0])
+    report = {}
+    for name, path in decoders:
+        wins = Counter(r["category"] for r in rows if r[name]["sr"])
+        views = Counter(r["category"] for r in rows)
+        aborts = Counter(r[name]["abort"] or "success" for r in rows)
+        report[name] = {
+            "decoder": path, "object_views": len(rows), "sr": round(sum(wins.values()) / max(1, len(rows)), 4),
+            "rsr": round(sum(r[name]["rsr"] for r in rows) / max(1, len(rows)), 4),
+            "sr_by_category": {c: f"{wins[c]}/{n}" for c, n in sorted(views.items())}, "outcomes": dict(aborts),
+        }  # fmt: skip
+        if name != decoders[0][0]:
+            report[name]["paired_with_first"] = paired_table(first, outcomes(out, name))
+    return report
+
+
+def parse(argv=None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--scenes", type=Path, nargs="+", required=True, help="scene folders (objects no decoder saw)")
+    p.add_argument("--decoders", nargs="+", required=True, help="NAME=DECODER.pt; the first is the reference")
+    p.add_argument("--out", type=Path, required=True, help="records (resumable) and report.json")
+    p.add_argument("--labels-from", type=Path, default=None, help="an eval-scenes output whose labels/ are reused")
+    p.add_argument("--grasps", default="pose", choices=LADDER, help="grasp setting (inference.grasp_anchoring.LADDER)")
+    p.add_argument("--depth", nargs="+", default=["realistic"], choices=["true", "realistic"])
+    p.add_argument("--max-scenes", type=int, default=None, help="the first N scenes of each folder")
+    p.add_argument("--workers", type=int, default=2)
+    args = p.parse_args(argv)
+    for folder in args.scenes:
+        if not (folder / "manifest.json").is_file():
+            p.error(f"--scenes: {folder}: not a scenes folder (no manifest.json)")
+    if args.labels_from and not (args.labels_from / "labels").is_dir():
+        p.error(f"--labels-from: {args.labels_from}: holds no labels/ folder")
+    args.decoders = [tuple(d.partition("=")[::2]) for d in args.decoders]
+    for name, path in args.decoders:
+        if not name or not Path(path).is_file():
+            p.error(f"--decoders: {name}={path}: expected NAME=FILE with an existing decoder checkpoint")
+    return args
+
+
+def main(argv=None) -> int:
+    from centerart.errors import CenterArtError
+    from centerart.evaluation.scene_eval import EvalScenesConfig, list_scene_dirs, set_key
+    from centerart.models.checkpoint import load_decoder
+    from centerart.utils.parallel import parallel_map
+
+    args = parse(argv)
+    decoders = args.decoders
+    try:  # bad input (not a decoder, a scene of a training object): one line, before any work
+        for _, path in decoders:
+            load_decoder(Path(path))
+        sets = {set_key(f): list_scene_dirs(f, args.max_scenes) for f in args.scenes}
+        check_held_out(args.scenes, sets, decoders)
+    except CenterArtError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    if args.labels_from and not (args.out / "labels").exists():
+        shutil.copytree(args.labels_from / "labels", args.out / "labels")
+    defaults = EvalScenesConfig(scenes=(), out=args.out)
+    cfg = {"depth": tuple(args.depth), "grasps": args.grasps, "ablation": False, "seed": defaults.seed,
+           "labels_per_state": defaults.labels_per_state, "label_max_trials": defaults.label_max_trials}  # fmt: skip
+    jobs = [(name, str(d), str(args.out), decoders, cfg) for name, dirs in sets.items() for d in dirs]
+    started = time.perf_counter()
+    list(parallel_map(scene_job, jobs, args.workers, "scenes"))
+    wall_s = round(time.perf_counter() - started, 1)
+    report = {"scenes": [str(s) for s in args.scenes], "grasps": args.grasps, "depth": args.depth,
+              "wall_s_this_run": wall_s, "decoders": summary(args.out, decoders)}  # fmt: skip
+    emit(report, args.out / "report.json")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
