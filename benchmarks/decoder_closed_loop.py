@@ -28,7 +28,7 @@ import json
 import shutil
 import sys
 import time
-from collections import Counter
+from collections import Counter, defaultdict
 from pathlib import Path
 
 from bench_report import emit
@@ -48,26 +48,39 @@ def predictor(decoder: str, grasps: str):
     return _PREDICTORS[(decoder, grasps)]
 
 
-def object_rows(ctx, v, decoders: list[tuple[str, str]], grasps: str, codes: dict) -> list[dict]:
-    """One row per visible object of view ``v``: each decoder's top-grasp outcome (SR, abort word) and code fit."""
+def reference_outcomes(ctx, v, seed: int) -> dict[int, dict]:
+    """Scene object -> the outcomes of the scene evaluation's reference rows on view ``v``: the geometric
+    ``baseline`` (handles in the depth points inside the true mask) and a ground-truth ``label`` executed."""
+    from centerart.evaluation.scene_rows import baseline_rows, oracle_rows
+
+    out: dict[int, dict] = defaultdict(dict)
+    for method, rows in (("baseline", baseline_rows(ctx, v, seed)), ("label", oracle_rows(ctx, v))):
+        for r in rows:
+            out[r["instance"]][method] = {"sr": bool(r["sr"]), "abort": r["sr_abort"], "rsr": bool(r["rsr"])}
+    return out
+
+
+def object_rows(ctx, v, decoders: list[tuple[str, str]], cfg: dict, codes: dict) -> list[dict]:
+    """One row per visible object of view ``v``: each decoder's top-grasp outcome (SR, abort word, RSR), and the
+    reference rows' with ``cfg["references"]``."""
     from centerart.evaluation.code_oracle import oracle_code, true_detection
     from centerart.evaluation.scene_rows import top_grasp_trial
     from centerart.geometry.gravity import gravity_from_world_T_camera
 
-    rows = []
+    rows, refs = [], reference_outcomes(ctx, v, cfg["seed"]) if cfg["references"] else {}
     for _, obj in v.ground_truth():
         k = obj["instance"] - 1
         row = {"scene": v.scene, "view": v.view, "depth": v.depth_mode, "instance": k, "object_id": obj["object_id"],
                "category": obj["category"], "state_normalized": obj["joint"]["state_normalized"]}  # fmt: skip
         for name, path in decoders:
-            p = predictor(path, grasps)
+            p = predictor(path, cfg["grasps"])
             p.gravity = gravity_from_world_T_camera(v.world_T_camera)  # as the scene evaluation gives it (TF)
             if (name, k) not in codes:
                 codes[(name, k)] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], seed=k)
             pred = p.predict_detection(true_detection(obj, v.instances, codes[(name, k)]), v.rgb, v.depth, v.K)
             trial = top_grasp_trial(ctx, v, k, pred.grasp_poses)
             row[name] = {"sr": bool(trial["sr"]), "abort": trial["sr_abort"], "rsr": bool(trial["rsr"])}
-        rows.append(row)
+        rows.append(row | refs.get(k, {}))
     return rows
 
 
@@ -88,7 +101,7 @@ def scene_job(job: tuple) -> dict:
     try:
         rows, codes = [], {}
         for v in view_inputs(Path(scene_dir), args["depth"]):
-            rows += object_rows(ctx, v, decoders, args["grasps"], codes)
+            rows += object_rows(ctx, v, decoders, args, codes)
     finally:
         ctx.phys.close()
     atomic_write_json(record, {"scene": Path(scene_dir).name, "set": set_name, "rows": rows,
@@ -121,14 +134,14 @@ def outcomes(out: Path, name: str) -> dict:
     return rows
 
 
-def summary(out: Path, decoders: list[tuple[str, str]]) -> dict:
-    """Each decoder's SR (overall and per category) and its pairing with the first."""
+def summary(out: Path, named: list[tuple[str, str]]) -> dict:
+    """Each decoder's (and reference's) SR, overall and per category, and its pairing with the first."""
     from centerart.evaluation.paired import paired_table
 
     rows = [r for p in sorted((out / "records").glob("*/*.json")) for r in json.loads(p.read_text())["rows"]]
-    first = outcomes(out, decoders[0][0])
+    first = outcomes(out, named[0][0])
     report = {}
-    for name, path in decoders:
+    for name, path in named:
         wins = Counter(r["category"] for r in rows if r[name]["sr"])
         views = Counter(r["category"] for r in rows)
         aborts = Counter(r[name]["abort"] or "success" for r in rows)
@@ -137,7 +150,7 @@ def summary(out: Path, decoders: list[tuple[str, str]]) -> dict:
             "rsr": round(sum(r[name]["rsr"] for r in rows) / max(1, len(rows)), 4),
             "sr_by_category": {c: f"{wins[c]}/{n}" for c, n in sorted(views.items())}, "outcomes": dict(aborts),
         }  # fmt: skip
-        if name != decoders[0][0]:
+        if name != named[0][0]:
             report[name]["paired_with_first"] = paired_table(first, outcomes(out, name))
     return report
 
@@ -145,7 +158,8 @@ def summary(out: Path, decoders: list[tuple[str, str]]) -> dict:
 def parse(argv=None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenes", type=Path, nargs="+", required=True, help="scene folders (objects no decoder saw)")
-    p.add_argument("--decoders", nargs="+", required=True, help="NAME=DECODER.pt; the first is the reference")
+    p.add_argument("--decoders", nargs="*", default=[], help="NAME=DECODER.pt; the first is the reference")
+    p.add_argument("--references", action="store_true", help="also the baseline and a label executed, per view")
     p.add_argument("--out", type=Path, required=True, help="records (resumable) and report.json")
     p.add_argument("--labels-from", type=Path, default=None, help="an eval-scenes output whose labels/ are reused")
     p.add_argument("--grasps", default="pose", choices=LADDER, help="grasp setting (inference.grasp_anchoring.LADDER)")
@@ -158,6 +172,8 @@ def parse(argv=None) -> argparse.Namespace:
             p.error(f"--scenes: {folder}: not a scenes folder (no manifest.json)")
     if args.labels_from and not (args.labels_from / "labels").is_dir():
         p.error(f"--labels-from: {args.labels_from}: holds no labels/ folder")
+    if not args.decoders and not args.references:
+        p.error("--decoders: give at least one decoder (or --references)")
     args.decoders = [tuple(d.partition("=")[::2]) for d in args.decoders]
     for name, path in args.decoders:
         if not name or not Path(path).is_file():
@@ -185,13 +201,15 @@ def main(argv=None) -> int:
         shutil.copytree(args.labels_from / "labels", args.out / "labels")
     defaults = EvalScenesConfig(scenes=(), out=args.out)
     cfg = {"depth": tuple(args.depth), "grasps": args.grasps, "ablation": False, "seed": defaults.seed,
+           "references": args.references,
            "labels_per_state": defaults.labels_per_state, "label_max_trials": defaults.label_max_trials}  # fmt: skip
     jobs = [(name, str(d), str(args.out), decoders, cfg) for name, dirs in sets.items() for d in dirs]
     started = time.perf_counter()
     list(parallel_map(scene_job, jobs, args.workers, "scenes"))
     wall_s = round(time.perf_counter() - started, 1)
+    named = decoders + ([(r, "reference") for r in ("baseline", "label")] if args.references else [])
     report = {"scenes": [str(s) for s in args.scenes], "grasps": args.grasps, "depth": args.depth,
-              "wall_s_this_run": wall_s, "decoders": summary(args.out, decoders)}  # fmt: skip
+              "wall_s_this_run": wall_s, "decoders": summary(args.out, named)}  # fmt: skip
     emit(report, args.out / "report.json")
     return 0
 
