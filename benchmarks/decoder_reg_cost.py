@@ -14,7 +14,6 @@ import argparse
 import json
 import subprocess
 import sys
-import time
 
 SETTINGS = {"none": (0.0, False), "dropout": (0.2, False), "weight_norm": (0.0, True), "both": (0.2, True)}
 
@@ -26,29 +25,15 @@ def time_setting(preset: str, setting: str, threads: int, points: int, steps: in
     from centerart.models.decoder import SGDFDecoder
     from centerart.models.decoder import preset as decoder_preset
     from centerart.utils.torch_cpu import flush_denormals, use_cpu_threads
+    from denormals import median_pass_s  # benchmarks/ (this script's folder)
 
     flush_denormals()
     use_cpu_threads(threads)
     dropout, weight_norm = SETTINGS[setting]
     torch.manual_seed(0)
-    model = SGDFDecoder(decoder_preset(preset, dropout=dropout, weight_norm=weight_norm)).train()
-    gen = torch.Generator().manual_seed(0)
-    code = 0.3 * torch.randn(points, model.config.code_dim, generator=gen)
-    joint, xyz = torch.rand(points, generator=gen), 0.3 * torch.randn(points, 3, generator=gen)
-    times = []
-    for _ in range(steps + 1):  # the first is a warm-up
-        t0 = time.perf_counter()
-        out = model(code, joint, xyz)
-        model.zero_grad()
-        (out.sdf.abs().mean() + out.offset.abs().mean()).backward()
-        times.append(time.perf_counter() - t0)
-    times = sorted(times[1:])
-    return {
-        "setting": setting,
-        "dropout": dropout,
-        "weight_norm": weight_norm,
-        "step_s": round(times[len(times) // 2], 4),
-    }
+    model = SGDFDecoder(decoder_preset(preset, dropout=dropout, weight_norm=weight_norm))
+    step_s = median_pass_s(model, points, steps)
+    return {"setting": setting, "dropout": dropout, "weight_norm": weight_norm, "step_s": round(step_s, 4)}
 
 
 def main(argv: list[str] | None = None) -> int:
