@@ -68,13 +68,14 @@ def object_rows(ctx, v, decoders: list[tuple[str, str]], cfg: dict, codes: dict)
     from centerart.geometry.gravity import gravity_from_world_T_camera
 
     rows, refs = [], reference_outcomes(ctx, v, cfg["seed"]) if cfg["references"] else {}
+    gravity = gravity_from_world_T_camera(v.world_T_camera)  # as the scene evaluation gives it (TF)
     for _, obj in v.ground_truth():
         k = obj["instance"] - 1
         row = {"scene": v.scene, "view": v.view, "depth": v.depth_mode, "instance": k, "object_id": obj["object_id"],
                "category": obj["category"], "state_normalized": obj["joint"]["state_normalized"]}  # fmt: skip
         for name, path in decoders:
             p = predictor(path, cfg["grasps"])
-            p.gravity = gravity_from_world_T_camera(v.world_T_camera)  # as the scene evaluation gives it (TF)
+            p.gravity = gravity
             if (name, k) not in codes:
                 codes[(name, k)] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], seed=k)
             pred = p.predict_detection(true_detection(obj, v.instances, codes[(name, k)]), v.rgb, v.depth, v.K)
@@ -88,11 +89,10 @@ def scene_job(job: tuple) -> dict:
     """Every row of one scene into OUT/records/<set>/<scene>.json (skipped when it is there: resume)."""
     from centerart.evaluation.scene_eval import scene_context, view_inputs
     from centerart.utils.atomic import atomic_write_json
-    from centerart.utils.torch_cpu import flush_denormals, use_cpu_threads
+    from centerart.utils.torch_cpu import use_cpu_threads
 
     set_name, scene_dir, out, decoders, args = job
-    flush_denormals()
-    use_cpu_threads(1)
+    use_cpu_threads(1)  # denormals read as zero too
     record = Path(out) / "records" / set_name / f"{Path(scene_dir).name}.json"
     if record.is_file():
         return {"skipped": True}
@@ -121,25 +121,28 @@ def check_held_out(folders: list[Path], sets: dict, decoders: list[tuple[str, st
         check({o["object_id"]: o["fingerprint"] for o in info["objects"].values()}, trained, str(folder))
 
 
-def outcomes(out: Path, name: str) -> dict:
-    """(set, scene, view, depth, method, instance, object) -> SR of decoder ``name``, as ``evaluation.paired``
-    keys its rows."""
-    rows = {}
+def read_rows(out: Path) -> list[dict]:
+    """Every row of OUT's records, each with its set's name (``set``)."""
+    rows = []
     for path in sorted((out / "records").glob("*/*.json")):
         rec = json.loads(path.read_text())
-        for r in rec["rows"]:
-            rows[(rec["set"], r["scene"], r["view"], r["depth"], "oracle-code", r["instance"], r["object_id"])] = r[
-                name
-            ]["sr"]
+        rows += [{**r, "set": rec["set"]} for r in rec["rows"]]
     return rows
+
+
+def outcomes(rows: list[dict], name: str) -> dict:
+    """(set, scene, view, depth, method, instance, object) -> SR of decoder ``name``, as ``evaluation.paired``
+    keys its rows."""
+    keys = ("set", "scene", "view", "depth")
+    return {(*(r[k] for k in keys), "oracle-code", r["instance"], r["object_id"]): r[name]["sr"] for r in rows}
 
 
 def summary(out: Path, named: list[tuple[str, str]]) -> dict:
     """Each decoder's (and reference's) SR, overall and per category, and its pairing with the first."""
     from centerart.evaluation.paired import paired_table
 
-    rows = [r for p in sorted((out / "records").glob("*/*.json")) for r in json.loads(p.read_text())["rows"]]
-    first = outcomes(out, named[0][0])
+    rows = read_rows(out)
+    first = outcomes(rows, named[0][0])
     report = {}
     for name, path in named:
         wins = Counter(r["category"] for r in rows if r[name]["sr"])
@@ -151,7 +154,7 @@ def summary(out: Path, named: list[tuple[str, str]]) -> dict:
             "sr_by_category": {c: f"{wins[c]}/{n}" for c, n in sorted(views.items())}, "outcomes": dict(aborts),
         }  # fmt: skip
         if name != named[0][0]:
-            report[name]["paired_with_first"] = paired_table(first, outcomes(out, name))
+            report[name]["paired_with_first"] = paired_table(first, outcomes(rows, name))
     return report
 
 

@@ -24,11 +24,10 @@ def time_setting(preset: str, setting: str, threads: int, points: int, steps: in
 
     from centerart.models.decoder import SGDFDecoder
     from centerart.models.decoder import preset as decoder_preset
-    from centerart.utils.torch_cpu import flush_denormals, use_cpu_threads
+    from centerart.utils.torch_cpu import use_cpu_threads
     from denormals import median_pass_s  # benchmarks/ (this script's folder)
 
-    flush_denormals()
-    use_cpu_threads(threads)
+    use_cpu_threads(threads)  # denormals read as zero too
     dropout, weight_norm = SETTINGS[setting]
     torch.manual_seed(0)
     model = SGDFDecoder(decoder_preset(preset, dropout=dropout, weight_norm=weight_norm))
