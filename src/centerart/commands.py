@@ -235,12 +235,18 @@ def _slice_done(cfg, line: dict, summary: str, commit, export: str) -> None:
 
 def slices_status(cfg) -> None:
     from centerart.recipe.slices import learning_curve, status_table
+    from centerart.recipe.stopping import stopping_rule, stopping_summary
 
-    print(status_table(cfg.run), end="")
+    table = status_table(cfg.run)
+    print(table, end="")
+    if table.endswith("(no slice yet)\n"):
+        return
+    curve = learning_curve(cfg.run)
+    print("\n" + stopping_summary(stopping_rule(curve)))
     if cfg.plot is not None:
         from centerart.viz.learning_curve import draw_learning_curve
 
-        print(f"learning curve: {draw_learning_curve(learning_curve(cfg.run), cfg.plot)}")
+        print(f"learning curve: {draw_learning_curve(curve, cfg.plot)}")
 
 
 def slices_replay(cfg) -> None:

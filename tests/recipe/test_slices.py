@@ -64,6 +64,7 @@ def test_two_slices_write_a_ledger_that_replays_to_the_same_weights(tiny_run, tm
     assert main(["slices", "status", "--run", str(run), "--plot", str(tmp_path / "curve.png")]) == 0
     table = capsys.readouterr().out
     assert "| 2 | 2 | 5 | 3 | 6 |" in table and f"learning curve: {tmp_path / 'curve.png'}" in table
+    assert "stopping rule (3 consecutive slices without a new best validation figure)" in table
     assert (tmp_path / "curve.png").read_bytes()[:8] == PNG_SIGNATURE
     # The replay trains each slice in one go: equal weights also say the stopped-and-resumed slice 1 lost nothing.
     assert main(["slices", "replay", "--run", str(run), "--work", str(tmp_path / "replay"), *COMMON]) == 0
