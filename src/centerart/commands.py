@@ -234,12 +234,12 @@ def _slice_done(cfg, line: dict, summary: str, commit, export: str) -> None:
 
 
 def slices_status(cfg) -> None:
+    from centerart.recipe.ledger import read_ledger
     from centerart.recipe.slices import learning_curve, status_table
     from centerart.recipe.stopping import stopping_rule, stopping_summary
 
-    table = status_table(cfg.run)
-    print(table, end="")
-    if table.endswith("(no slice yet)\n"):
+    print(status_table(cfg.run), end="")
+    if not read_ledger(cfg.run, {}):  # no slice yet (the table says so): no curve, no rule
         return
     curve = learning_curve(cfg.run)
     print("\n" + stopping_summary(stopping_rule(curve)))
