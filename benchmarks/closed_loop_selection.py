@@ -1,16 +1,18 @@
 """Closed-loop SR of several encoders on the same scenes, each paired against the first (views and objects).
 
 For choosing between checkpoints without the test scenes: each encoder is run through ``centerart eval scenes`` on
-the given scenes (stereo depth, ``centerart[pose]``, the headline SR only: no stage analysis, shapes, oracle or
-baseline, which makes a run about 0.4 s per single-object view on 2 cores once the labels exist), the first run's
-ground-truth labels copied into the others so that only the encoders differ; then every encoder's SR by image
-association per set, and its pairing with the first (``centerart.evaluation.paired``: the sign test on views and on
-distinct objects). Prints JSON:
+the given scenes (stereo depth, ``centerart[pose]``, or ``centerart`` without the pose correction with ``--grasps
+full``; the headline SR only: no stage analysis, shapes, oracle or baseline, which makes a run about 0.4 s per
+single-object view on 2 cores once the labels exist), the first run's ground-truth labels copied into the others so
+that only the encoders differ; then every encoder's SR by image association per set, and its pairing with the first
+(``centerart.evaluation.paired``: the sign test on views and on distinct objects). Prints JSON:
 
     PYTHONPATH=src:benchmarks python benchmarks/closed_loop_selection.py --scenes DEV/single --out OUT \
         --decoder training_runs/encoder-small-102/decoder.pt --encoders slice1=S1.pt slice4=S4.pt [--workers 2]
     # DEV/single: scenes of objects no model trained on and no test scene shows (benchmarks/results/
     # eval_scenes_s24/README.md makes 400 of 200 new objects); OUT/<name>/ holds each evaluation (resumable)
+    PYTHONPATH=src:benchmarks python benchmarks/closed_loop_selection.py --make-sets SETS --out OUT --decoder D \
+        --encoders ...   # instead of --scenes: the two selection sets of sessions 24-31, made in SETS if missing
 """
 
 from __future__ import annotations
@@ -22,6 +24,30 @@ from pathlib import Path
 
 from bench_report import emit
 
+#: The selection sets used since session 24 (``benchmarks/results/eval_scenes_s24/``): scene folder -> (object
+#: seed, scene seed). 200 objects (40 per category) and 400 single-object views each; no training or test set
+#: uses these seeds, and the folder names are the set names in every selection report.
+SELECTION_SETS = {"d_single": (6000, 6100), "d2_single": (6500, 6600)}
+
+
+def make_selection_sets(folder: Path, workers: int) -> list[Path]:
+    """The two selection sets under ``folder`` (``<set>_objects/``, ``<set>/``); both stages skip finished items."""
+    from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
+    from centerart.scenes.dataset import GenerateScenesConfig, generate_scenes
+
+    scenes = []
+    for name, (object_seed, scene_seed) in SELECTION_SETS.items():
+        objects = folder / f"{name}_objects"
+        generate_objects(GenerateObjectsConfig(out=objects, count=40, seed=object_seed, workers=workers))
+        generate_scenes(
+            GenerateScenesConfig(
+                objects=objects, out=folder / name, layout="single", count=400, views_per_scene=1,
+                seed=scene_seed, save_ir=False, workers=workers,
+            )
+        )  # fmt: skip
+        scenes.append(folder / name)
+    return scenes
+
 
 def evaluate(name: str, encoder: Path, args, first: Path | None) -> Path:
     """``centerart eval scenes`` of one encoder into ``OUT/name`` (the first evaluation's labels copied in)."""
@@ -32,7 +58,7 @@ def evaluate(name: str, encoder: Path, args, first: Path | None) -> Path:
         shutil.copytree(first / "labels", out / "labels")
     evaluate_scenes(EvalScenesConfig(
         scenes=tuple(args.scenes), out=out, encoder=encoder, decoder=args.decoder, depth=("realistic",),
-        grasps=("pose",), oracle=False, baseline=False, shape=False, ablation=False,
+        grasps=(args.grasps,), oracle=False, baseline=False, shape=False, ablation=False,
         workers=args.workers,
     ))  # fmt: skip
     return out
@@ -48,12 +74,19 @@ def main() -> None:
     from centerart.evaluation.paired import paired_table, read_outcomes
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--scenes", type=Path, nargs="+", required=True, help="scene folders (objects no model saw)")
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--scenes", type=Path, nargs="+", help="scene folders (objects no model saw)")
+    where.add_argument("--make-sets", type=Path, help="make (or resume) the two selection sets here and use them")
     p.add_argument("--encoders", nargs="+", required=True, help="NAME=ENCODER.pt; the first is the reference")
     p.add_argument("--decoder", type=Path, default=None, help="the decoder all encoders regress codes of")
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--grasps", default="pose", choices=["pose", "full"],
+                   help="pose: centerart[pose] (the pose corrected from the depth first; the selections so far); "
+                   "full: without that correction")  # fmt: skip
     args = p.parse_args()
+    if args.make_sets is not None:
+        args.scenes = make_selection_sets(args.make_sets, args.workers)
     named = [e.partition("=")[::2] for e in args.encoders]
     report: dict = {"scenes": [str(s) for s in args.scenes], "decoder": str(args.decoder), "encoders": {}}
     first, reference = None, None  # the first evaluation's folder (its labels) and outcomes, read once
