@@ -26,9 +26,8 @@ from centerart.geometry.camera import Intrinsics
 from centerart.models.encoder import readout
 from centerart.models.encoder.checkpoint import load_encoder
 from centerart.models.encoder.detect import detect_objects
-from centerart.scenes.dataset import DEPTH_SCALE_MM, read_png, read_view_labels
 from centerart.training import encoder_metrics as em
-from centerart.training.encoder_data import collect_views
+from centerart.training.encoder_data import collect_views, load_view_for_encoder
 
 
 def split_error(pred_t: np.ndarray, true_t: np.ndarray) -> tuple[float, float]:
@@ -45,8 +44,7 @@ def view_rows(detections, labels: dict) -> list[dict]:
     for obj in labels["objects"]:
         if obj["visible_fraction"] < em.MIN_VISIBLE_FRACTION:
             continue
-        x0, y0, x1, y1 = obj["bbox_xyxy"]
-        inside = [d for d in detections if x0 <= d.peak_uv[0] <= x1 and y0 <= d.peak_uv[1] <= y1]
+        inside = [d for d in detections if em.peak_in_box(d.peak_uv, obj["bbox_xyxy"])]
         true_t = np.asarray(obj["camera_T_object"], float)[:3, 3]
         if not inside:
             rows.append({"category": obj["category"], "found_in_image": False})
@@ -56,14 +54,6 @@ def view_rows(detections, labels: dict) -> list[dict]:
         rows.append({"category": obj["category"], "found_in_image": True, "error_m": float(np.hypot(along, across)),
                      "along_m": along, "across_m": across, "range_m": float(np.linalg.norm(true_t))})  # fmt: skip
     return rows
-
-
-def read_view(view_dir: Path, depth_mode: str) -> tuple[np.ndarray, np.ndarray, dict]:
-    """RGB, depth (m) and labels of one view; no masks needed (training and validation views have none)."""
-    realistic = view_dir / "depth_realistic.png"
-    depth_png = realistic if depth_mode == "realistic" and realistic.is_file() else view_dir / "depth_true.png"
-    depth = read_png(depth_png).astype(np.float32) / DEPTH_SCALE_MM
-    return read_png(view_dir / "rgb.png"), depth, read_view_labels(view_dir)
 
 
 def summarize(rows: list[dict]) -> dict:
@@ -99,9 +89,10 @@ def main() -> None:
     encoder = load_encoder(args.checkpoint).encoder
     rows = []
     for view_dir in collect_views(args.scenes):
-        rgb, depth, labels = read_view(view_dir, args.depth)
-        camera = Intrinsics.from_matrix(labels["K"], labels["width"], labels["height"])
-        rows += view_rows(detect_objects(encoder, rgb, depth, camera, readout.PEAK_THRESHOLD).detections, labels)
+        v = load_view_for_encoder(view_dir)  # no masks needed: training and validation views have none
+        depth = v.depth_realistic if args.depth == "realistic" and v.depth_realistic is not None else v.depth_true
+        camera = Intrinsics.from_matrix(v.labels["K"], v.labels["width"], v.labels["height"])
+        rows += view_rows(detect_objects(encoder, v.rgb, depth, camera, readout.PEAK_THRESHOLD).detections, v.labels)
     by_category = defaultdict(list)
     for r in rows:
         by_category[r["category"]].append(r)

@@ -68,18 +68,19 @@ def view_metrics(detections: list[Detection], labels: dict, codes: dict | None =
     return {"counts": counts, "rows": rows, "recall_rows": recall_rows}
 
 
+def peak_in_box(uv, box) -> bool:
+    """Whether a heatmap peak (u, v camera pixels, or None) lies in a labelled box (x0, y0, x1, y1, pixels)."""
+    return uv is not None and box[0] <= uv[0] <= box[2] and box[1] <= uv[1] <= box[3]
+
+
 def image_counts(detections, objects: list[dict], visible: list[bool]) -> dict:
     """A looser, image-space check: is a visible object's box hit by some peak, and does each peak lie in some
     object's box? Separates "found in the image" from "3-D centre within the match distance"."""
-
-    def inside(uv, box):
-        return uv is not None and box[0] <= uv[0] <= box[2] and box[1] <= uv[1] <= box[3]
-
     peaks = [getattr(d, "peak_uv", None) for d in detections]
     boxes = [o["bbox_xyxy"] for o in objects]
     return {
-        "found_in_image": sum(1 for j, b in enumerate(boxes) if visible[j] and any(inside(p, b) for p in peaks)),
-        "peaks_on_objects": sum(1 for p in peaks if any(inside(p, b) for b in boxes)),
+        "found_in_image": sum(1 for j, b in enumerate(boxes) if visible[j] and any(peak_in_box(p, b) for p in peaks)),
+        "peaks_on_objects": sum(1 for p in peaks if any(peak_in_box(p, b) for b in boxes)),
     }
 
 
