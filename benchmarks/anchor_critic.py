@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.models.grasp_critic import ANCHOR_FEATURES, fit_critic, save_critic
 
 L2_GRID = (0.1, 1.0, 10.0, 100.0)
@@ -156,4 +156,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 
 
 def average_encoders(paths: list[Path], out: Path) -> dict:
@@ -49,4 +49,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

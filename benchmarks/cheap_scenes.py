@@ -32,6 +32,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from bench_report import run_main
+
 CHEAP = {"intrinsics": "d415-half", "depth": "stereo-model", "save_ir": False, "save_masks": False,
          "save_textures": False}  # fmt: skip
 FULL = {"intrinsics": "d415", "depth": "stereo", "save_ir": False}
@@ -141,4 +143,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -22,7 +22,7 @@ import shutil
 from collections import Counter
 from pathlib import Path
 
-from bench_report import emit
+from bench_report import emit, run_main
 
 #: The selection sets used since session 24 (``benchmarks/results/eval_scenes_s24/``): scene folder -> (object
 #: seed, scene seed). 200 objects (40 per category) and 400 single-object views each; no training or test set
@@ -103,4 +103,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

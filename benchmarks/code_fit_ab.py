@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.evaluation.decoder_eval import chamfer_fscore
 from centerart.inference.reconstruction import MeshConfig, reconstruct_object
@@ -136,4 +136,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

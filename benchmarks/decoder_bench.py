@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from bench_report import run_main
+
 
 def bench_training(threads: int, steps: int = 10, points: int = 16384) -> dict:
     from centerart.models.decoder import SGDFDecoder, preset
@@ -128,4 +130,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -31,7 +31,7 @@ import time
 from collections import Counter, defaultdict
 from pathlib import Path
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.inference.grasp_anchoring import LADDER
 
 _PREDICTORS: dict = {}
@@ -218,4 +218,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    run_main(main)

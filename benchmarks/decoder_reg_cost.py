@@ -15,6 +15,8 @@ import json
 import subprocess
 import sys
 
+from bench_report import run_main
+
 SETTINGS = {"none": (0.0, False), "dropout": (0.2, False), "weight_norm": (0.0, True), "both": (0.2, True)}
 
 
@@ -57,4 +59,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    run_main(main)

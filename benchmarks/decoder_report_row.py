@@ -18,6 +18,8 @@ import statistics
 import sys
 from pathlib import Path
 
+from bench_report import run_main
+
 #: The 12 objects that decoder-small-102, its paper-reg twin and the shipped decoder all held out.
 TWELVE = (
     "dishwasher_0014 dishwasher_0021 dishwasher_0023 microwave_0008 microwave_0012 microwave_0013 microwave_0016 "
@@ -60,4 +62,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    run_main(main)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_report import emit
+from bench_report import emit, run_main
 
 SPLITS = ("train", "test", "real")
 KINDS = ("closed", "open")
@@ -83,4 +83,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -17,16 +17,11 @@ from pathlib import Path
 
 import torch
 
+from bench_report import run_main
+
 
 def main() -> None:
-    from centerart.models.checkpoint import save_checkpoint
-    from centerart.training.decoder_module import DecoderModule
-    from centerart.training.train_decoder import (
-        CodeFitConfig,
-        TrainDecoderConfig,
-        _load_data,
-        training_object_fingerprints,
-    )
+    from centerart.training.train_decoder import TrainDecoderConfig, build_module, export_decoder, load_split_data
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--run", type=Path, required=True, help="the training run's output folder")
@@ -37,22 +32,15 @@ def main() -> None:
     names = {f.name for f in dataclasses.fields(TrainDecoderConfig)}
     cfg = TrainDecoderConfig(**{k: v for k, v in saved.items() if k in names})
     cfg = dataclasses.replace(cfg, data=Path(cfg.data), out=Path(cfg.out), progress=False)
-    data = _load_data(cfg)
-    module = DecoderModule(
-        cfg.decoder_config(), cfg.loss_config(), data.split.train_objects, cfg.lr_decoder, cfg.lr_codes, cfg.epochs,
-        heldout_object_states=data.heldout_objects, code_fit=CodeFitConfig(steps=cfg.val_code_fit_steps, seed=cfg.seed),
-    )  # fmt: skip
+    data = load_split_data(cfg)
+    module = build_module(cfg, data)
     blob = torch.load(args.ckpt, map_location="cpu", weights_only=False)  # our own training output
     module.load_state_dict(blob["state_dict"])
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    train_config = json.loads(json.dumps({**dataclasses.asdict(cfg), "snapshot_of": str(args.ckpt)}, default=str))
-    save_checkpoint(
-        args.out, module.decoder.cpu(), data.split.train_objects, module.code_array(), data.bounds,
-        data.split.to_dict(), train_config, {"epoch": blob.get("epoch"), "global_step": blob.get("global_step")},
-        training_objects=training_object_fingerprints(Path(cfg.data), data.split.train_objects),
-    )  # fmt: skip
-    print(json.dumps({"out": str(args.out), "epoch": blob.get("epoch"), "global_step": blob.get("global_step")}))
+    step = {"epoch": blob.get("epoch"), "global_step": blob.get("global_step")}
+    export_decoder(args.out, cfg, module, data, {**dataclasses.asdict(cfg), "snapshot_of": str(args.ckpt)}, step)
+    print(json.dumps({"out": str(args.out), **step}))
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

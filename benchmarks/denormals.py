@@ -16,6 +16,8 @@ import sys
 import time
 from pathlib import Path
 
+from bench_report import run_main
+
 
 def load_decoder(state_path: Path):
     import torch
@@ -107,4 +109,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    run_main(main)

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.geometry.camera import Intrinsics
 from centerart.models.checkpoint import load_decoder
 from centerart.models.encoder import readout
@@ -111,4 +111,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

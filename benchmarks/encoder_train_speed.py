@@ -22,6 +22,7 @@ from pathlib import Path
 
 import torch
 
+from bench_report import run_main
 from centerart.models.checkpoint import default_checkpoint, load_shape_codes
 from centerart.models.encoder.config import preset
 from centerart.models.encoder.losses import EncoderLossConfig, encoder_loss
@@ -111,4 +112,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.evaluation.metrics import score_calibration
 from centerart.models.grasp_critic import GRASP_FEATURES, GraspCritic, fit_critic, load_critic, save_critic
 
@@ -206,4 +206,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.evaluation.decoder_eval import chamfer_fscore, execute_grasps, fitted_code
 from centerart.inference.decoder_grasps import extract_grasps, extraction_setting
@@ -130,4 +130,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench_report import run_main
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
 from centerart.grasps import executor as ex
@@ -146,4 +147,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -12,6 +12,8 @@ import argparse
 import json
 from pathlib import Path
 
+from bench_report import run_main
+
 SETTINGS = ("proposal", "checks", "snap", "square", "observed", "handle", "full", "pose")
 
 
@@ -79,4 +81,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

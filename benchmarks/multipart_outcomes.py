@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_report import emit
+from bench_report import emit, run_main
 
 
 def failed_rows(eval_out: Path):
@@ -92,4 +92,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench_report import run_main
 from centerart.assets.categories import CATEGORIES
 from centerart.assets.dataset import GenerateObjectsConfig, generate_objects
 
@@ -69,4 +70,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

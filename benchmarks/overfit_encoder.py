@@ -21,7 +21,7 @@ from pathlib import Path
 
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.evaluation.encoder_overfit import OverfitConfig, overfit_encoder
 from centerart.models.checkpoint import load_decoder
 from centerart.models.encoder.config import EncoderConfig
@@ -84,4 +84,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

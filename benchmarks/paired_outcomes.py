@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.evaluation.paired import CompareEvalsConfig, compare_evaluations
 
 
@@ -28,4 +28,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

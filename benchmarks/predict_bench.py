@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.inference.grasp_anchoring import AnchoringConfig
 from centerart.inference.predictor import Predictor, PredictorConfig
 from centerart.inference.refinement import RefineConfig
@@ -87,4 +87,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

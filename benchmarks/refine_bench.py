@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.inference.predictor import Predictor, PredictorConfig
 from centerart.inference.refinement import RefineConfig, SdfRefineConfig
 from centerart.scenes.dataset import load_view
@@ -64,4 +64,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

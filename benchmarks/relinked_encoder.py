@@ -17,6 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from bench_report import run_main
 from centerart.errors import CenterArtError
 from centerart.models.checkpoint_files import file_sha256, read_blob, write_blob
 from centerart.models.encoder.checkpoint import FORMAT, VERSION
@@ -49,4 +50,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    run_main(main)

@@ -41,6 +41,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bench_report import run_main
+
 
 def measure(
     objects: Path,
@@ -209,4 +211,4 @@ def main() -> None:
 
 if __name__ == "__main__":
     np.set_printoptions(precision=3)
-    main()
+    run_main(main)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import open3d as o3d
 
+from bench_report import run_main
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.dataset import GenerateObjectsConfig, generate_objects, list_objects
 from centerart.geometry.transforms import make_pose, rotation_about_axis
@@ -130,4 +131,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

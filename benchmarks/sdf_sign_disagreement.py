@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import open3d as o3d
 
+from bench_report import run_main
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.dataset import list_objects
 from centerart.sdf.sampling import SamplingConfig, sample_points, soup_check_inside, soup_sign_inside
@@ -88,4 +89,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -18,7 +18,7 @@ import numpy as np
 import torch
 from scipy.stats import mannwhitneyu
 
-from bench_report import emit
+from bench_report import emit, run_main
 
 
 def eval_rows(eval_out: Path) -> dict[tuple[str, str], dict]:
@@ -86,4 +86,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 
 
 def judged(results: list[dict]) -> dict[tuple, float]:
@@ -110,4 +110,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

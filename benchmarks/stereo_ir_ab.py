@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bench_report import run_main
+
 BANDS_M = ((0.5, 1.5), (1.5, 2.5), (2.5, 3.5), (3.5, 5.0))
 BLIND_BAND_PX = 80
 
@@ -92,4 +94,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

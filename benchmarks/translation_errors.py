@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from bench_report import emit
+from bench_report import emit, run_main
 from centerart.geometry.camera import Intrinsics
 from centerart.models.encoder import readout
 from centerart.models.encoder.checkpoint import load_encoder
@@ -106,4 +106,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)
