@@ -19,7 +19,6 @@ import numpy as np
 import torch
 
 from bench_report import emit, run_main
-from centerart.geometry.camera import Intrinsics
 from centerart.models.checkpoint import load_decoder
 from centerart.models.encoder import readout
 from centerart.models.encoder.checkpoint import load_encoder
@@ -70,8 +69,7 @@ def main() -> None:
     results, times, matched, sweep = [], [], [], {t: [] for t in args.sweep}
     for k, view_dir in enumerate(collect_views(args.scenes)):
         v = load_view(view_dir)
-        depth = v.depth_realistic if args.depth == "realistic" and v.depth_realistic is not None else v.depth_true
-        camera = Intrinsics.from_matrix(v.labels["K"], v.labels["width"], v.labels["height"])
+        depth, camera = v.depth(args.depth)[0], v.camera
         t0 = time.perf_counter()
         enc = detect_objects(loaded.encoder, v.rgb, depth, camera, min([args.peak_threshold, *args.sweep]))
         if k > 0:

@@ -22,7 +22,6 @@ import numpy as np
 import torch
 
 from bench_report import emit, run_main
-from centerart.geometry.camera import Intrinsics
 from centerart.models.encoder import readout
 from centerart.models.encoder.checkpoint import load_encoder
 from centerart.models.encoder.detect import detect_objects
@@ -90,8 +89,7 @@ def main() -> None:
     rows = []
     for view_dir in collect_views(args.scenes):
         v = load_view_for_encoder(view_dir)  # no masks needed: training and validation views have none
-        depth = v.depth_realistic if args.depth == "realistic" and v.depth_realistic is not None else v.depth_true
-        camera = Intrinsics.from_matrix(v.labels["K"], v.labels["width"], v.labels["height"])
+        depth, camera = v.depth(args.depth)[0], v.camera
         rows += view_rows(detect_objects(encoder, v.rgb, depth, camera, readout.PEAK_THRESHOLD).detections, v.labels)
     by_category = defaultdict(list)
     for r in rows:

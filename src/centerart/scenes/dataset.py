@@ -40,6 +40,7 @@ from PIL import Image
 from centerart.assets.articulated_object import ArticulatedObject
 from centerart.assets.dataset import list_objects
 from centerart.errors import CenterArtError
+from centerart.geometry.camera import Intrinsics
 from centerart.scenes.cameras import ShellRanges, intrinsics
 from centerart.scenes.collisions import check_scene
 from centerart.scenes.description import SceneDescription
@@ -351,6 +352,18 @@ class SceneView:
     links: np.ndarray
     heatmap: np.ndarray
     labels: dict
+
+    def depth(self, kind: Literal["realistic", "true"]) -> tuple[np.ndarray, str]:
+        """The ``kind`` depth image (m) and the kind returned: the true depth where the realistic one is asked for
+        and the view was saved without it."""
+        if kind == "realistic" and self.depth_realistic is not None:
+            return self.depth_realistic, "realistic"
+        return self.depth_true, "true"
+
+    @property
+    def camera(self) -> Intrinsics:
+        """The view's pinhole camera (``labels.json``'s K and image size; OpenCV frame)."""
+        return Intrinsics.from_matrix(self.labels["K"], self.labels["width"], self.labels["height"])
 
 
 #: What readers of ``labels.json`` rely on (the file holds more); checked when a view is read.

@@ -17,7 +17,6 @@ import torch
 from torch.utils.data import Dataset
 
 from centerart.errors import CenterArtError
-from centerart.geometry.camera import Intrinsics
 from centerart.models.encoder.config import EncoderConfig
 from centerart.models.encoder.inputs import Letterbox, to_tensors
 from centerart.scenes.dataset import (
@@ -103,16 +102,14 @@ class EncoderViewDataset(Dataset):
     def item(self, index: int, epoch: int) -> dict:
         """View ``index`` as drawn in ``epoch`` (its augmentation is seeded by (seed, epoch, index))."""
         view = load_view_for_encoder(self.views[index])
-        labels = view.labels
-        camera = Intrinsics.from_matrix(labels["K"], labels["width"], labels["height"])
+        labels, camera = view.labels, view.camera
         cfg = self.config
         if self.augment is not None:
             rng = np.random.default_rng([self.seed, epoch, index])
             depth, kind = choose_depth(view.depth_true, view.depth_realistic, camera.K, self.augment, rng)
             box = random_letterbox(camera.width, camera.height, cfg.input_width, cfg.input_height, self.augment, rng)
         else:
-            use_true = self.depth == "true" or view.depth_realistic is None
-            depth, kind = (view.depth_true, "true") if use_true else (view.depth_realistic, "realistic")
+            depth, kind = view.depth(self.depth)
             box = Letterbox.fit(camera.width, camera.height, cfg.input_width, cfg.input_height)
         rgb_in, depth_in = box.warp(view.rgb[..., :3], depth)
         if self.augment is not None:

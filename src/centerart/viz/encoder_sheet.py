@@ -67,7 +67,6 @@ def draw_predictions(rgb: np.ndarray, dets, K: np.ndarray) -> np.ndarray:
 
 
 def show_encoder(cfg: ShowEncoderConfig) -> Path:
-    from centerart.geometry.camera import Intrinsics
     from centerart.models.encoder.checkpoint import load_encoder
     from centerart.models.encoder.detect import detect_objects
     from centerart.scenes.dataset import list_views, load_view
@@ -76,8 +75,7 @@ def show_encoder(cfg: ShowEncoderConfig) -> Path:
     rows = []
     for view_dir in list_views(cfg.scenes)[: cfg.max_views]:
         v = load_view(view_dir)
-        depth = v.depth_realistic if cfg.depth == "realistic" and v.depth_realistic is not None else v.depth_true
-        camera = Intrinsics.from_matrix(v.labels["K"], v.labels["width"], v.labels["height"])
+        depth, camera = v.depth(cfg.depth)[0], v.camera
         enc = detect_objects(encoder, v.rgb, depth, camera)
         valid = depth[depth > 0]
         lo, hi = (np.percentile(valid, 1), np.percentile(valid, 99)) if valid.size else (0.0, 1.0)
