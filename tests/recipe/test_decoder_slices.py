@@ -38,6 +38,7 @@ def test_two_decoder_slices_write_a_ledger_that_replays(tiny_decoder_run, tmp_pa
     assert [x["steps"] for x in lines] == [3, 2] and [x["first_step"] for x in lines] == [0, 3]
     assert [x["lr_scale"] for x in lines] == [1.0, 0.5] and lines[0]["objects_sha256"] == lines[1]["objects_sha256"]
     assert lines[0]["objects"] == 4 and lines[0]["heldout_objects"] == 1
+    assert [x["calls"] for x in lines] == [2, 1]  # slice 1: stopped and resumed, both calls' wall time counted
     assert "val_object/sdf_near" in lines[1]["validation"] and "start_validation" in lines[0]
     # the held-out object's shape and grasps, meshed and executed (eval decoder's figures, in the line)
     v = lines[1]["validation"]

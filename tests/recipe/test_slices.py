@@ -49,6 +49,8 @@ def test_two_slices_write_a_ledger_that_replays_to_the_same_weights(tiny_run, tm
     assert lines[0]["images"] == 3 and lines[1]["distinct_images"] == 6
     assert lines[0]["data"]["depth"] == "analytic" and lines[1]["data"]["depth"] == "stereo-model"
     assert lines[0]["code_version"] and lines[1]["finished_with"]
+    # Slice 1 took two calls (stopped, resumed): its line counts both calls' wall time, not the last one's.
+    assert [x["calls"] for x in lines] == [2, 1] and {"data", "train", "validation"} <= set(lines[0]["wall_s"])
     # Slice 1 also measured where the run started (the first point of its learning curve); later slices do not.
     assert lines[0]["start_validation"]["views"] == 2 and "start_validation" not in lines[1]
     assert lines[1]["state_sha256"] == file_sha256(run / "state.pt")

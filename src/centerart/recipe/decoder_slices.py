@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Literal
 
 from centerart.errors import CenterArtError
-from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, check_run_files, read_ledger
+from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, add_call_wall, check_run_files, read_ledger
 from centerart.recipe.slices import commit_folder, compare_replay, finish_pending, load_plan
 from centerart.utils.checks import at_least, between, positive
 from centerart.utils.torch_cpu import use_cpu_threads
@@ -332,12 +332,12 @@ def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
     first = lines[-1]["first_step"] + lines[-1]["steps"] if lines else 0
     t1 = time.perf_counter()
     reached = train_slice(run, state, settings, cfg, first + settings["steps"])
+    spent = add_call_wall(work_slice, {"data": data_s, "train": time.perf_counter() - t1})
     if reached < first + settings["steps"]:
         echo(f"slice {k}: stopped at step {reached - first} of {settings['steps']}; rerun the same command to resume")
         return {"stopped": reached - first, "of": settings["steps"]}
-    wall = {"data": data_s, "train": time.perf_counter() - t1}
-    line = {**settings, "first_step": first, "objects_sha256": objects_sha}
-    return _finish_slice(run, run_dir, lines, work_slice, state, line, wall)
+    line = {**settings, "first_step": first, "objects_sha256": objects_sha, "calls": spent["calls"]}
+    return _finish_slice(run, run_dir, lines, work_slice, state, line, spent["wall_s"])
 
 
 def _finish_slice(run: _Run, run_dir: Path, lines: list[dict], work_slice: Path, state, line: dict, wall) -> dict:

@@ -14,10 +14,12 @@ from pathlib import Path
 
 from centerart.errors import CenterArtError
 from centerart.models.checkpoint_files import file_sha256
-from centerart.utils.atomic import atomic_write_bytes
+from centerart.utils.atomic import atomic_write_bytes, atomic_write_json
 
 LEDGER = "ledger.jsonl"
 STATE = "state.pt"
+#: ``WORK/slice_k/calls.json``: the wall seconds of each call that trained part of slice k.
+CALLS = "calls.json"
 #: Fields every ledger line has, with their types.
 LINE_FIELDS = {
     "slice": int,
@@ -104,3 +106,22 @@ def append_line(run: Path, lines: list[dict], line: dict) -> None:
     """Write the ledger with ``line`` appended, atomically (a crash leaves the old ledger)."""
     text = "".join(json.dumps(x, sort_keys=True) + "\n" for x in [*lines, line])
     atomic_write_bytes(Path(run) / LEDGER, text.encode())
+
+
+def add_call_wall(work_slice: Path, wall: dict[str, float]) -> dict:
+    """Record one call's wall seconds (``{"data": s, "train": s}``) in ``WORK/slice_k/calls.json`` and return
+    the slice's totals so far, ``{"calls": n, "wall_s": {stage: seconds}}``.
+
+    A slice stopped by ``--max-minutes`` or ``--stop-after`` is finished by later calls, often in other sessions;
+    its ledger line must state what the whole slice cost, not the last call's share, so each call that returns adds
+    its own (a call killed before it returns leaves only its saved progress, and its time is not counted).
+    """
+    path = Path(work_slice) / CALLS
+    try:
+        calls = json.loads(path.read_text()) if path.is_file() else []
+    except json.JSONDecodeError as err:
+        raise CenterArtError(f"{path}: not JSON ({err.msg}); remove it to restart the slice's time count") from None
+    calls.append({k: round(float(v), 1) for k, v in wall.items()})
+    atomic_write_json(path, calls)
+    stages = sorted({k for call in calls for k in call})
+    return {"calls": len(calls), "wall_s": {k: round(sum(c.get(k, 0.0) for c in calls), 1) for k in stages}}

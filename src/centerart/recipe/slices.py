@@ -26,7 +26,14 @@ from pathlib import Path
 from typing import Literal
 
 from centerart.errors import CenterArtError
-from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, append_line, check_run_files, read_ledger
+from centerart.recipe.ledger import (
+    DECODER_LINE_FIELDS,
+    STATE,
+    add_call_wall,
+    append_line,
+    check_run_files,
+    read_ledger,
+)
 from centerart.recipe.slice_plan import SliceData, SlicePlan, plan_preset, slice_seeds
 from centerart.utils.checks import at_least, positive
 from centerart.utils.torch_cpu import use_cpu_threads
@@ -470,12 +477,12 @@ def next_slice(cfg: SlicesNextConfig, echo=print) -> dict:
                "save": lambda s: _save_progress(s, work_slice), "progress": cfg.progress}  # fmt: skip
     t1 = time.perf_counter()
     reached = train_on(state, views, codes, plan, settings, start, options)
-    train_s = time.perf_counter() - t1
+    spent = add_call_wall(work_slice, {"data": data_s, "train": time.perf_counter() - t1})
     if reached < settings["steps"]:
         echo(f"slice {k}: stopped at step {reached} of {settings['steps']}; rerun the same command to resume")
         return {"stopped": reached, "of": settings["steps"]}
-    return _finish_slice(run, lines, work_slice, plan, state, settings, codes, decoder, val,
-                         {"data": data_s, "train": train_s}, len(views))  # fmt: skip
+    return _finish_slice(run, lines, work_slice, plan, state, {**settings, "calls": spent["calls"]}, codes, decoder,
+                         val, spent["wall_s"], len(views))  # fmt: skip
 
 
 def _save_progress(state, work_slice: Path) -> None:
