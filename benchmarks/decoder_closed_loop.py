@@ -169,7 +169,13 @@ def parse(argv=None) -> argparse.Namespace:
     p.add_argument("--depth", nargs="+", default=["realistic"], choices=["true", "realistic"])
     p.add_argument("--max-scenes", type=int, default=None, help="the first N scenes of each folder")
     p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--against", type=Path, default=None,
+                   help="an earlier run's rows.jsonl (same scenes), paired with each decoder")  # fmt: skip
+    p.add_argument("--against-columns", nargs="*", default=[], help="columns of --against, e.g. shipped reg4")
+    p.add_argument("--summary-only", action="store_true", help="no new scenes: summarise OUT's records as they are")
     args = p.parse_args(argv)
+    if args.against is not None and not args.against.is_file():
+        p.error(f"--against: {args.against}: no such rows file")
     for folder in args.scenes:
         if not (folder / "manifest.json").is_file():
             p.error(f"--scenes: {folder}: not a scenes folder (no manifest.json)")
@@ -182,6 +188,37 @@ def parse(argv=None) -> argparse.Namespace:
         if not name or not Path(path).is_file():
             p.error(f"--decoders: {name}={path}: expected NAME=FILE with an existing decoder checkpoint")
     return args
+
+
+def _unhashed(key: tuple) -> tuple:
+    """A row key with its set's name stripped of the folder hash (``set_key``), so that the same scenes generated
+    in another folder or on another machine pair up."""
+    return (key[0].rsplit("-", 1)[0], *key[1:])
+
+
+def against(out: Path, names: list[str], rows_file: Path, columns: list[str]) -> dict:
+    """Each decoder of this run paired with each column of an earlier run's ``rows.jsonl`` on the views both hold
+    (same scenes, outcomes by name: "success" counts), plus each side's successes on those views."""
+    from centerart.evaluation.paired import paired_table
+
+    earlier = [json.loads(line) for line in rows_file.read_text().splitlines() if line.strip()]
+    keys = ("set", "scene", "view", "depth")
+    mine = {n: {_unhashed(k): v for k, v in outcomes(read_rows(out), n).items()} for n in names}
+    report = {}
+    for col in columns:
+        theirs = {
+            _unhashed((*(r.get(k, "realistic") for k in keys), "oracle-code", r["instance"], r["object_id"])): (
+                r[col] == "success"
+            )
+            for r in earlier
+            if col in r
+        }
+        for n in names:
+            common = set(mine[n]) & set(theirs)
+            report[f"{col} / {n}"] = {"views": len(common), col: sum(theirs[k] for k in common),
+                                      n: sum(mine[n][k] for k in common),
+                                      "paired": paired_table(theirs, mine[n])}  # fmt: skip
+    return report
 
 
 def main(argv=None) -> int:
@@ -208,11 +245,14 @@ def main(argv=None) -> int:
            "labels_per_state": defaults.labels_per_state, "label_max_trials": defaults.label_max_trials}  # fmt: skip
     jobs = [(name, str(d), str(args.out), decoders, cfg) for name, dirs in sets.items() for d in dirs]
     started = time.perf_counter()
-    list(parallel_map(scene_job, jobs, args.workers, "scenes"))
+    if not args.summary_only:
+        list(parallel_map(scene_job, jobs, args.workers, "scenes"))
     wall_s = round(time.perf_counter() - started, 1)
     named = decoders + ([(r, "reference") for r in ("baseline", "label")] if args.references else [])
     report = {"scenes": [str(s) for s in args.scenes], "grasps": args.grasps, "depth": args.depth,
               "wall_s_this_run": wall_s, "decoders": summary(args.out, named)}  # fmt: skip
+    if args.against is not None:
+        report["against"] = against(args.out, [n for n, _ in decoders], args.against, args.against_columns)
     emit(report, args.out / "report.json")
     return 0
 
