@@ -59,20 +59,9 @@ def centred_on_material(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 def execute_all(obj, q: float, poses: list[np.ndarray]) -> list[str]:
     """Each pose executed on ``obj`` at joint state ``q`` (metric): "ok", "weak" (moved too little) or the abort."""
-    import pybullet as pb
+    from centerart.evaluation.decoder_eval import execute_grasp_results
 
-    from centerart.grasps import executor as ex
-    from centerart.grasps.sim_world import connect, spawn_object_in_pybullet
-
-    client = connect()
-    try:
-        target = spawn_object_in_pybullet(client, obj, q)
-        executor = ex.GraspExecutor(client)
-        direction = ex.commanded_direction(obj.joint_type, q, obj.joint_range[1])
-        results = [executor.execute(p, target, direction) for p in poses]
-    finally:
-        pb.disconnect(client)
-    return [r.abort or ("ok" if r.success else "weak") for r in results]
+    return [r.abort or ("ok" if r.success else "weak") for r in execute_grasp_results(obj, q, poses)]
 
 
 def closed_state(states: list):

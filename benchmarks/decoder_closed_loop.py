@@ -203,7 +203,8 @@ def against(out: Path, names: list[str], rows_file: Path, columns: list[str]) ->
 
     earlier = [json.loads(line) for line in rows_file.read_text().splitlines() if line.strip()]
     keys = ("set", "scene", "view", "depth")
-    mine = {n: {_unhashed(k): v for k, v in outcomes(read_rows(out), n).items()} for n in names}
+    rows = read_rows(out)
+    mine = {n: {_unhashed(k): v for k, v in outcomes(rows, n).items()} for n in names}
     report = {}
     for col in columns:
         theirs = {

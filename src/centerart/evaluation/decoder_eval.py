@@ -141,6 +141,12 @@ def _select(indices: list[int], k: int) -> list[int]:
 
 def execute_grasps(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
     """Execute up to k TCP poses (object frame = world frame here) on the object at state q."""
+    return [bool(r.success) for r in execute_grasp_results(obj, q, poses[:k])]
+
+
+def execute_grasp_results(obj, q: float, poses) -> list:
+    """Each TCP pose (object frame = world frame here) executed on the object at state q, in one physics world:
+    its ``grasps.executor.GraspResult`` (success, displacement, abort reason)."""
     import pybullet as pb
 
     from centerart.grasps import executor as ex
@@ -151,7 +157,7 @@ def execute_grasps(obj, q: float, poses: np.ndarray, k: int) -> list[bool]:
         target = spawn_object_in_pybullet(client, obj, q)
         executor = ex.GraspExecutor(client)
         direction = ex.commanded_direction(obj.joint_type, q, obj.joint_range[1])
-        return [bool(executor.execute(p, target, direction).success) for p in poses[:k]]
+        return [executor.execute(p, target, direction) for p in poses]
     finally:
         pb.disconnect(client)
 
