@@ -106,3 +106,43 @@ def test_a_state_of_other_objects_or_a_damaged_file_is_one_error(box_states, tmp
     (tmp_path / "bad.pt").write_bytes(b"not a torch file")
     with pytest.raises(CenterArtError, match=r"bad\.pt"):
         load_decoder_state(tmp_path / "bad.pt", other)
+
+
+def test_grasp_term_kept_off_the_codes_gives_them_the_sdf_gradient_only(box_states):
+    split, roles = box_states
+    batch = _batches(split, roles).batch(0)
+
+    def grads(loss_config, loss_key):
+        torch.manual_seed(0)
+        module = _builder(split, roles)()
+        module.loss_config = loss_config
+        terms = module.loss_terms(batch)
+        loss = terms["loss"] if loss_key == "loss" else loss_config.sdf_weight * terms["sdf"]
+        loss = loss + (loss_config.code_weight * terms["code"] if loss_key != "loss" else 0)
+        loss.backward()
+        return module.codes.weight.grad.clone(), module.decoder.head.weight.grad.clone()
+
+    codes_off, head_off = grads(LossConfig(grasp_moves_codes=False), "loss")
+    codes_sdf, _ = grads(LossConfig(), "sdf")
+    codes_on, head_on = grads(LossConfig(), "loss")
+    torch.testing.assert_close(codes_off, codes_sdf)  # the codes see the SDF and the prior only
+    torch.testing.assert_close(head_off, head_on)  # the weights still see the grasp term
+    assert not torch.allclose(codes_on, codes_sdf)  # and the grasp term does reach the codes by default
+
+
+def test_refit_replaces_each_training_code_by_a_code_fitted_to_its_sdf(box_states):
+    from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
+    from centerart.training.decoder_slice_training import refit_training_codes
+
+    split, roles = box_states
+    state = new_decoder_state(_builder(split, roles), seed=3)
+    run_decoder_steps(state, _batches(split, roles), SliceSchedule(1.0, 0, 1.0), 2)
+    before = state.module.codes.weight.detach().clone()
+    moved = refit_training_codes(state, roles["train"], steps=4, seed=0, points_per_step=256, progress=False)
+    oid = state.module.object_ids[1]
+    obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in roles["train"] if s.object_id == oid])
+    cfg = CodeFitConfig(steps=4, points_per_step=256, code_weight=state.module.loss_config.code_weight, seed=0)
+    expected = torch.as_tensor(fit_code(state.module.decoder, obs, cfg)[0])
+    torch.testing.assert_close(state.module.codes.weight[1].detach(), expected)
+    assert moved["max_code_change"] > 0 and not torch.equal(before, state.module.codes.weight.detach())
+    assert float(state.optimizer.state[state.module.codes.weight]["exp_avg"].abs().sum()) == 0.0

@@ -137,6 +137,11 @@ class DecoderSlicesConfig:
     """Processes making objects, labels and SDF samples (default: all cores)."""
     threads: int = 0
     """torch CPU threads (0: torch default)."""
+    codes_from_sdf: bool = False
+    """This slice's shape codes learn from the SDF alone: the grasp term's gradient is kept off them
+    (``LossConfig.grasp_moves_codes``), and where the previous slice let it reach them, every code is first replaced
+    by one fitted to the object's SDF samples (``refit_training_codes``). The grasp field is then trained on the
+    codes a test-time fit finds for an object's surface. Recorded in the ledger line and replayed."""
     commit: bool = False
     """git commit the run folder after the slice (the ledger line and the files it names)."""
     progress: bool = True
@@ -203,19 +208,48 @@ def check_objects(lines: list[dict], objects_sha: str, work: Path) -> None:
 
 
 # ---------------------------------------------------------------------------- one slice
-def slice_settings(plan: DecoderSlicePlan, cfg: DecoderSlicesConfig, index: int, saved: dict | None) -> dict:
-    """What slice ``index`` trains (the plan's defaults with this call's overrides); a resumed slice keeps the
-    settings it started with and refuses different ones."""
+def slice_settings(plan: DecoderSlicePlan, cfg: DecoderSlicesConfig, index: int, saved: dict | None,
+                   previous: dict) -> dict:  # fmt: skip
+    """What slice ``index`` trains (the plan's defaults with this call's overrides; ``previous``: the last ledger
+    line, empty for the first slice); a resumed slice keeps the settings it started with and refuses others."""
     from centerart.utils.manifest import code_version
 
     if saved is not None:
-        differ = [k for k, v in (("steps", cfg.steps), ("lr_scale", cfg.lr_scale)) if v is not None and v != saved[k]]
+        given = (("steps", cfg.steps), ("lr_scale", cfg.lr_scale), ("codes_from_sdf", cfg.codes_from_sdf))
+        differ = [k for k, v in given if v is not None and v != saved.get(k, False)]
         if differ:
             raise CenterArtError(f"slice {index} started with other settings ({', '.join(differ)}); rerun without them")
         return saved
     steps = plan.steps if cfg.steps is None else cfg.steps
-    return {"slice": index, "steps": steps, "batch_size": plan.batch_items, "lr_scale": float(cfg.lr_scale),
-            "code_version": code_version()}  # fmt: skip
+    settings = {"slice": index, "steps": steps, "batch_size": plan.batch_items, "lr_scale": float(cfg.lr_scale),
+                "code_version": code_version()}  # fmt: skip
+    if cfg.codes_from_sdf:  # absent from lines made without it (and from every line before it existed)
+        settings |= {"codes_from_sdf": True, "refit_codes": not previous.get("codes_from_sdf", False)}
+    return settings
+
+
+#: Code-fit steps and points per step of :func:`refit_codes`: those ``centerart eval decoder`` fits new objects with.
+REFIT_STEPS, REFIT_POINTS = 200, 4096
+
+
+def apply_code_settings(run: _Run, state, settings: dict, progress: bool = False, save_to: Path | None = None) -> float:
+    """Set the slice's loss on ``state`` (grasp gradient on the codes or not) and, where the slice refits the codes
+    and ``state`` has not been refitted yet, refit them (``state.meta["codes_refit"]`` records it) and save the
+    state to ``save_to`` (the slice's progress: a refit takes minutes). Returns the refit's wall seconds (0: none)."""
+    from dataclasses import replace
+
+    from centerart.training.decoder_slice_training import refit_training_codes, save_decoder_state
+
+    from_sdf = bool(settings.get("codes_from_sdf", False))
+    state.module.loss_config = replace(state.module.loss_config, grasp_moves_codes=not from_sdf)
+    if not settings.get("refit_codes") or "codes_refit" in (state.meta or {}):
+        return 0.0
+    t0 = time.perf_counter()
+    moved = refit_training_codes(state, run.data.train, REFIT_STEPS, run.plan.seed, REFIT_POINTS, progress)
+    state.meta = {**(state.meta or {}), "codes_refit": {k: round(v, 6) for k, v in moved.items()}}
+    if save_to is not None:
+        save_decoder_state(save_to, state)
+    return time.perf_counter() - t0
 
 
 class _Run:
@@ -323,8 +357,10 @@ def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
     run = _Run(plan, work)
     state = start_state(run, run_dir, lines, work_slice)
     saved = work_slice / "settings.json"
-    settings = slice_settings(plan, cfg, k, json.loads(saved.read_text()) if saved.is_file() else None)
+    settings = slice_settings(plan, cfg, k, json.loads(saved.read_text()) if saved.is_file() else None,
+                              lines[-1] if lines else {})  # fmt: skip
     atomic_write_json(saved, settings)
+    refit_s = apply_code_settings(run, state, settings, cfg.progress, work_slice / "progress.pt")
     data_s = time.perf_counter() - t0
     if not lines and "start_validation" not in settings:  # where the run starts, for its learning curve
         settings["start_validation"] = run.validate(state)
@@ -332,11 +368,14 @@ def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
     first = lines[-1]["first_step"] + lines[-1]["steps"] if lines else 0
     t1 = time.perf_counter()
     reached = train_slice(run, state, settings, cfg, first + settings["steps"])
-    spent = add_call_wall(work_slice, {"data": data_s, "train": time.perf_counter() - t1})
+    wall = {"data": data_s, "train": time.perf_counter() - t1} | ({"refit_codes": refit_s} if refit_s else {})
+    spent = add_call_wall(work_slice, wall)
     if reached < first + settings["steps"]:
         echo(f"slice {k}: stopped at step {reached - first} of {settings['steps']}; rerun the same command to resume")
         return {"stopped": reached - first, "of": settings["steps"]}
     line = {**settings, "first_step": first, "objects_sha256": objects_sha, "calls": spent["calls"]}
+    if "codes_refit" in (state.meta or {}):
+        line["codes_refit"] = state.meta["codes_refit"]
     return _finish_slice(run, run_dir, lines, work_slice, state, line, spent["wall_s"])
 
 
@@ -460,6 +499,8 @@ def replay_decoder(run_dir: Path, work: Path, workers: int | None, tolerance: fl
     run = _Run(plan, work)
     state = run.new_state()
     for line in lines:
+        state.meta = {}  # a line that refits refits the state as replayed so far
+        apply_code_settings(run, state, line, progress)
         run_decoder_steps(state, run.batches, run.schedule(line["lr_scale"]), line["first_step"] + line["steps"])
         echo(f"slice {line['slice']}: replayed {line['steps']} steps")
     saved = run.load(target)

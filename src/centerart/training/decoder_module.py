@@ -32,6 +32,16 @@ from centerart.models.losses import (
 from centerart.sdf.samples import StateData
 
 
+def keep_sdf_gradient_only(code_per_point: torch.Tensor, sdf_loss: torch.Tensor) -> None:
+    """Make the backward pass of the total loss give ``code_per_point`` (the codes fed to the decoder, (N, D)) the
+    gradient of ``sdf_loss`` alone (``LossConfig.grasp_moves_codes = False``); the decoder's weights still get
+    the whole loss's. Why a hook and not a second forward pass with detached codes: the gradient with respect to
+    the input costs one extra backward through the activations, a second forward would cost a whole step. The
+    code prior acts on the codes directly, not through this tensor, and keeps its gradient."""
+    (grad,) = torch.autograd.grad(sdf_loss, code_per_point, retain_graph=True)
+    code_per_point.register_hook(lambda _: grad)
+
+
 class DecoderModule(L.LightningModule):
     def __init__(
         self,
@@ -98,9 +108,12 @@ class DecoderModule(L.LightningModule):
         """The training loss and its terms on one batch (``decoder_loss``; ``loss`` is what is minimised)."""
         f = self._flat(batch)
         out = self.decoder(f["code"], f["joint"], f["xyz"])
-        return decoder_loss(
+        terms = decoder_loss(
             self.loss_config, out, f["xyz"], f["sdf"], f["grasp_points"], f["grasp_distance"], f["batch_codes"]
         )
+        if not self.loss_config.grasp_moves_codes and f["code"].requires_grad:
+            keep_sdf_gradient_only(f["code"], self.loss_config.sdf_weight * terms["sdf"])
+        return terms
 
     def training_step(self, batch, batch_idx):
         terms = self.loss_terms(batch)

@@ -153,3 +153,35 @@ def validate_decoder(state: DecoderTrainState, heldout_states: list[StateData], 
     if module.heldout_object_states:
         figures.update({f"val_object/{k}": v for k, v in module.heldout_object_metrics().items()})
     return figures
+
+
+def refit_training_codes(state: DecoderTrainState, train_states: list[StateData], steps: int, seed: int,
+                         points_per_step: int = 4096, progress: bool = True) -> dict:  # fmt: skip
+    """Replace every training object's code by a code fitted to its training SDF samples from the zero code, the
+    decoder frozen, under the run's code prior: what ``centerart eval decoder`` does for an object it never saw.
+    Adam's first moments of the codes are zeroed (they belong to the old codes). With
+    ``LossConfig.grasp_moves_codes = False`` afterwards, the grasp field is trained on codes a test-time fit finds.
+    Returns the mean and max distance between old and new codes."""
+    from tqdm import tqdm
+
+    from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
+
+    module = state.module
+    by_obj: dict[str, list[StateData]] = {}
+    for s in train_states:
+        by_obj.setdefault(s.object_id, []).append(s)
+    cfg = CodeFitConfig(steps=steps, points_per_step=points_per_step, code_weight=module.loss_config.code_weight,
+                        seed=seed)  # fmt: skip
+    weight = module.codes.weight
+    moved = []
+    for oid in tqdm(module.object_ids, desc="refit codes", disable=not progress):
+        obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in by_obj[oid]])
+        code = torch.as_tensor(fit_code(module.decoder, obs, cfg)[0])
+        row = module.object_ids.index(oid)
+        with torch.no_grad():
+            moved.append(float((weight[row] - code).norm()))
+            weight[row] = code
+    adam = state.optimizer.state.get(weight)
+    if adam and "exp_avg" in adam:
+        adam["exp_avg"].zero_()
+    return {"mean_code_change": float(np.mean(moved)), "max_code_change": float(np.max(moved))}
