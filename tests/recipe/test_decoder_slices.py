@@ -95,3 +95,20 @@ def test_a_decoder_run_with_the_papers_dropout_and_weight_norm_keeps_them(tiny_d
     assert main(args) == 0  # slice 2 continues the run with the decoder it was made with
     assert main(["slices", "status", "--run", str(run)]) == 0
     assert "dropout 0.2, weight_norm True" in capsys.readouterr().out
+
+
+@pytest.mark.slow  # ~30 s: one more tiny slice whose codes are refitted (4 code fits), and its replay
+def test_a_slice_whose_codes_learn_from_the_sdf_refits_them_and_replays(tiny_decoder_run, tmp_path, capsys):
+    run = Path(shutil.copytree(tiny_decoder_run[0], tmp_path / "run"))
+    before = load_decoder(run / "decoder.pt").codes
+    args = ["slices", "decoder", "--run", str(run), "--work", str(tiny_decoder_run[1]), *COMMON]
+    assert main([*args, "--steps", "1", "--codes-from-sdf"]) == 0
+    line = read_ledger(run, DECODER_LINE_FIELDS)[-1]
+    assert line["slice"] == 3 and line["codes_from_sdf"] and line["refit_codes"]
+    assert line["codes_refit"]["max_code_change"] > 0 and line["wall_s"]["refit_codes"] > 0
+    after = load_decoder(run / "decoder.pt").codes
+    assert all(not (after[o] == before[o]).all() for o in before)
+    assert main(["slices", "status", "--run", str(run)]) == 0
+    assert "| sdf, refitted |" in capsys.readouterr().out
+    assert main(["slices", "replay", "--run", str(run), "--work", str(tmp_path / "replay"), *COMMON]) == 0
+    assert "largest weight difference 0" in capsys.readouterr().out

@@ -470,14 +470,15 @@ def decoder_status_table(run: Path) -> str:
     head = (f"{run}: decoder run, preset {plan.preset}, decoder {plan.decoder_preset}, {plan.objects_count} objects "
             f"per category (seed {plan.objects_seed}), batch {plan.batch_items} x {plan.points_per_item} points, lr "
             f"{plan.lr_decoder} / {plan.lr_codes} (codes){_overrides_note(plan)}; figures in mm\n\n")  # fmt: skip
-    cols = ("slice", "steps", "total steps", "lr scale", "hours", *STATUS_COLUMNS, *EVAL_COLUMNS)
+    cols = ("slice", "steps", "total steps", "lr scale", "hours", *STATUS_COLUMNS, *EVAL_COLUMNS, "codes learn from")
     rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for x in lines:
         v = x["validation"]
         figures = [f"{v[c] * 1000:.2f}" if c in v else "-" for c in STATUS_COLUMNS]
         figures += [f"{v[c]:.2f}" if c in v else "-" for c in EVAL_COLUMNS]
         hours = sum(x.get("wall_s", {}).values()) / 3600
-        row = [x["slice"], x["steps"], x["first_step"] + x["steps"], x["lr_scale"], f"{hours:.2f}", *figures]
+        codes = ("sdf, refitted" if x.get("refit_codes") else "sdf") if x.get("codes_from_sdf") else "sdf, grasps"
+        row = [x["slice"], x["steps"], x["first_step"] + x["steps"], x["lr_scale"], f"{hours:.2f}", *figures, codes]
         rows.append("| " + " | ".join(str(r) for r in row) + " |")
     return head + "\n".join(rows) + ("\n" if lines else "\n(no slice yet)\n")
 
