@@ -228,8 +228,9 @@ def slice_settings(plan: DecoderSlicePlan, cfg: DecoderSlicesConfig, index: int,
     return settings
 
 
-#: Code-fit steps and points per step of :func:`refit_codes`: those ``centerart eval decoder`` fits new objects with.
-REFIT_STEPS, REFIT_POINTS = 200, 4096
+#: Code-fit steps and points per step of a slice's code refit: the closed-loop code oracle's
+#: (``evaluation.code_oracle.ORACLE_CODE_FIT``), whose data loss is ``centerart eval decoder``'s (200 x 4096) within 1 %.
+REFIT_STEPS, REFIT_POINTS = 200, 1024
 
 
 def apply_code_settings(run: _Run, state, settings: dict, progress: bool = False, save_to: Path | None = None) -> float:
