@@ -361,8 +361,8 @@ def next_decoder_slice(cfg: DecoderSlicesConfig, echo=print) -> dict:
     settings = slice_settings(plan, cfg, k, json.loads(saved.read_text()) if saved.is_file() else None,
                               lines[-1] if lines else {})  # fmt: skip
     atomic_write_json(saved, settings)
-    refit_s = apply_code_settings(run, state, settings, cfg.progress, work_slice / "progress.pt")
     data_s = time.perf_counter() - t0
+    refit_s = apply_code_settings(run, state, settings, cfg.progress, work_slice / "progress.pt")
     if not lines and "start_validation" not in settings:  # where the run starts, for its learning curve
         settings["start_validation"] = run.validate(state)
         atomic_write_json(saved, settings)
