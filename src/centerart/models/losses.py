@@ -35,7 +35,9 @@ class LossConfig:
     the SDF and the code prior alone, the objective a code is fitted under at test time (``models/code_fitting``),
     so a code fitted to an object's surface is the code the grasp field was trained with; the decoder's weights
     still learn from both terms. Why: with it on, the top grasp opened 10 of 15 closed training objects with their
-    trained codes and 2 of 15 with codes fitted to their SDF (``benchmarks/fitted_code_grasps.py``)."""
+    trained codes and 2 of 15 with codes fitted to their SDF (``benchmarks/fitted_code_grasps.py``). Not the default:
+    a slice trained with it off (``decoder-small-102-paper-reg`` slice 6) left the fitted codes at 2 of 15 and the
+    closed loop level (``benchmarks/results/decoder_closed_loop/``, slice 6)."""
 
 
 def control_points_torch(rotation: torch.Tensor, position: torch.Tensor) -> torch.Tensor:

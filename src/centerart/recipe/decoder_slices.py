@@ -229,7 +229,8 @@ def slice_settings(plan: DecoderSlicePlan, cfg: DecoderSlicesConfig, index: int,
 
 
 #: Code-fit steps and points per step of a slice's code refit: the closed-loop code oracle's
-#: (``evaluation.code_oracle.ORACLE_CODE_FIT``), whose data loss is ``centerart eval decoder``'s (200 x 4096) within 1 %.
+#: (``evaluation.code_oracle.ORACLE_CODE_FIT``), whose data loss is within 1 % of ``centerart eval decoder``'s
+#: (200 x 4096).
 REFIT_STEPS, REFIT_POINTS = 200, 1024
 
 
