@@ -147,22 +147,45 @@ def summarise(rows: list[dict]) -> dict:
     return out
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def run_parser(description: str) -> argparse.ArgumentParser:
+    """The arguments every decoder-run benchmark here takes: --decoder, --work, --out, --seed."""
+    p = argparse.ArgumentParser(description=description)
     p.add_argument("--decoder", type=Path, required=True, help="a decoder checkpoint of the run")
     p.add_argument("--work", type=Path, required=True, help="the run's WORK folder (objects/, grasps/, sdf/)")
     p.add_argument("--out", type=Path, required=True, help="report JSON")
-    p.add_argument("--objects", type=int, default=4, help="held-out objects in the tolerance part")
-    p.add_argument("--labels", type=int, default=8, help="labels per object in the tolerance part")
     p.add_argument("--seed", type=int, default=0)
+    return p
+
+
+def parse_run_args(p: argparse.ArgumentParser, argv) -> argparse.Namespace:
     args = p.parse_args(argv)
     for sub in ("objects", "grasps", "sdf"):
         if not (args.work / sub).is_dir():
             p.error(f"--work: {args.work} has no {sub}/ folder (a decoder run's WORK is expected)")
+    return args
+
+
+def object_states(sdf: Path, oids: list[str], seed: int) -> dict[str, list]:
+    """Each object's SDF-sample states (``sdf.samples.StateData``, 30,000 points each) from the run's ``sdf/``."""
+    from centerart.sdf.samples import load_states
+
+    by_obj: dict[str, list] = {}
+    with tempfile.TemporaryDirectory() as tmp:  # load_states reads a folder of object folders: the chosen ones
+        for oid in oids:
+            (Path(tmp) / oid).symlink_to((sdf / oid).resolve())
+        for st in load_states(Path(tmp), 30000, seed, progress=False):
+            by_obj.setdefault(st.object_id, []).append(st)
+    return by_obj
+
+
+def main(argv=None) -> int:
+    p = run_parser(__doc__.split("\n\n")[0])
+    p.add_argument("--objects", type=int, default=4, help="held-out objects in the tolerance part")
+    p.add_argument("--labels", type=int, default=8, help="labels per object in the tolerance part")
+    args = parse_run_args(p, argv)
 
     from centerart.assets.articulated_object import ArticulatedObject
     from centerart.models.checkpoint import load_decoder
-    from centerart.sdf.samples import load_states
     from centerart.training.decoder_data import DecoderSplit
     from centerart.utils.atomic import atomic_write_json
     from centerart.utils.torch_cpu import use_cpu_threads
@@ -170,12 +193,7 @@ def main(argv=None) -> int:
     use_cpu_threads(1)
     loaded = load_decoder(args.decoder)
     heldout = DecoderSplit.from_dict(loaded.meta["split"]).heldout_objects
-    by_obj: dict[str, list] = {}
-    with tempfile.TemporaryDirectory() as tmp:  # load_states reads a folder of object folders: the held-out ones
-        for oid in heldout:
-            (Path(tmp) / oid).symlink_to((args.work / "sdf" / oid).resolve())
-        for st in load_states(Path(tmp), 30000, args.seed, progress=False):
-            by_obj.setdefault(st.object_id, []).append(st)
+    by_obj = object_states(args.work / "sdf", heldout, args.seed)
     objects = {oid: ArticulatedObject.load(args.work / "objects" / oid) for oid in heldout}
     rows = centring(loaded, objects, by_obj, args.work / "grasps", args.seed)
     report = {

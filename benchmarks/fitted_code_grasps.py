@@ -19,10 +19,8 @@ Frames: object canonical frame = world frame; metres inside, cm and degrees in t
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -35,19 +33,6 @@ def chosen_objects(training: list[str], per_category: int) -> list[str]:
     for oid in sorted(training):
         by_cat.setdefault(oid.rsplit("_", 1)[0], []).append(oid)
     return [o for c in sorted(by_cat) for o in by_cat[c][:per_category]]
-
-
-def object_states(sdf: Path, oids: list[str], seed: int) -> dict[str, list]:
-    """Each object's SDF-sample states (``sdf.samples.StateData``, 30,000 points each)."""
-    from centerart.sdf.samples import load_states
-
-    by_obj: dict[str, list] = {}
-    with tempfile.TemporaryDirectory() as tmp:  # load_states reads a folder of object folders: the chosen ones
-        for oid in oids:
-            (Path(tmp) / oid).symlink_to((sdf / oid).resolve())
-        for st in load_states(Path(tmp), 30000, seed, progress=False):
-            by_obj.setdefault(st.object_id, []).append(st)
-    return by_obj
 
 
 def closed_row(loaded, work: Path, oid: str, states: list, seed: int) -> dict:
@@ -74,16 +59,11 @@ def closed_row(loaded, work: Path, oid: str, states: list, seed: int) -> dict:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--decoder", type=Path, required=True, help="a decoder checkpoint of the run")
-    p.add_argument("--work", type=Path, required=True, help="the run's WORK folder (objects/, grasps/, sdf/)")
-    p.add_argument("--out", type=Path, required=True, help="report JSON")
+    from closed_state_grasps import object_states, parse_run_args, run_parser
+
+    p = run_parser(__doc__.split("\n\n")[0])
     p.add_argument("--per-category", type=int, default=3, help="training objects per category")
-    p.add_argument("--seed", type=int, default=0)
-    args = p.parse_args(argv)
-    for sub in ("objects", "grasps", "sdf"):
-        if not (args.work / sub).is_dir():
-            p.error(f"--work: {args.work} has no {sub}/ folder (a decoder run's WORK is expected)")
+    args = parse_run_args(p, argv)
 
     from centerart.models.checkpoint import load_decoder
     from centerart.utils.atomic import atomic_write_json
