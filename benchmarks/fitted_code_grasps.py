@@ -49,8 +49,8 @@ def closed_row(loaded, work: Path, oid: str, states: list, seed: int) -> dict:
     labels = StateLabels.load(state_path(work / "grasps", oid, st.state_index)).poses.astype(np.float64)
     row = {"object": oid}
     codes = {"trained": loaded.codes[oid], "fitted": fitted_code(loaded, states, CODE_FIT_STEPS, seed)}
+    mesh_cfg, grasp_cfg = MeshConfig(resolution=128), extraction_setting("default", top_k=20)
     for name, code in codes.items():
-        mesh_cfg, grasp_cfg = MeshConfig(resolution=128), extraction_setting("default", top_k=20)
         _, found = predict_shape_and_grasps(loaded.decoder, code, st.joint, loaded.bounds, mesh_cfg, grasp_cfg)
         top = list(found.poses[:5])
         row[name] = execute_all(obj, q, top)

@@ -174,10 +174,9 @@ def refit_training_codes(state: DecoderTrainState, train_states: list[StateData]
                         seed=seed)  # fmt: skip
     weight = module.codes.weight
     moved = []
-    for oid in tqdm(module.object_ids, desc="refit codes", disable=not progress):
+    for row, oid in enumerate(tqdm(module.object_ids, desc="refit codes", disable=not progress)):
         obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in by_obj[oid]])
         code = torch.as_tensor(fit_code(module.decoder, obs, cfg)[0])
-        row = module.object_ids.index(oid)
         with torch.no_grad():
             moved.append(float((weight[row] - code).norm()))
             weight[row] = code
