@@ -35,8 +35,9 @@ def chosen_objects(training: list[str], per_category: int) -> list[str]:
     return [o for c in sorted(by_cat) for o in by_cat[c][:per_category]]
 
 
-def closed_row(loaded, work: Path, oid: str, states: list, seed: int) -> dict:
-    """Top-5 outcomes at the object's closed state with its trained code and with a code fitted to its SDF."""
+def closed_row(loaded, work: Path, oid: str, states: list, seed: int, fit_dropout: bool = False) -> dict:
+    """Top-5 outcomes at the object's closed state with its trained code and with a code fitted to its SDF (and,
+    with ``fit_dropout``, one fitted under the decoder's dropout)."""
     from centerart.assets.articulated_object import ArticulatedObject
     from centerart.evaluation.decoder_eval import fitted_code
     from centerart.grasps.labels import StateLabels, state_path
@@ -49,6 +50,8 @@ def closed_row(loaded, work: Path, oid: str, states: list, seed: int) -> dict:
     labels = StateLabels.load(state_path(work / "grasps", oid, st.state_index)).poses.astype(np.float64)
     row = {"object": oid}
     codes = {"trained": loaded.codes[oid], "fitted": fitted_code(loaded, states, CODE_FIT_STEPS, seed)}
+    if fit_dropout:
+        codes["fitted_dropout"] = fitted_code(loaded, states, CODE_FIT_STEPS, seed, dropout=True)
     mesh_cfg, grasp_cfg = MeshConfig(resolution=128), extraction_setting("default", top_k=20)
     for name, code in codes.items():
         _, found = predict_shape_and_grasps(loaded.decoder, code, st.joint, loaded.bounds, mesh_cfg, grasp_cfg)
@@ -63,6 +66,7 @@ def main(argv=None) -> int:
 
     p = run_parser(__doc__.split("\n\n")[0])
     p.add_argument("--per-category", type=int, default=3, help="training objects per category")
+    p.add_argument("--fit-dropout", action="store_true", help="also fit a code under the decoder's dropout")
     args = parse_run_args(p, argv)
 
     from centerart.models.checkpoint import load_decoder
@@ -75,12 +79,13 @@ def main(argv=None) -> int:
     states = object_states(args.work / "sdf", oids, args.seed)
     rows = []
     for oid in oids:
-        rows.append(closed_row(loaded, args.work, oid, states[oid], args.seed))
+        rows.append(closed_row(loaded, args.work, oid, states[oid], args.seed, args.fit_dropout))
         print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
     summary = {k: {"top1": sum(r[k][:1] == ["ok"] for r in rows), "any5": sum("ok" in r[k] for r in rows),
-                   "states": len(rows)} for k in ("trained", "fitted")}  # fmt: skip
+                   "states": len(rows)} for k in rows[0] if k in ("trained", "fitted", "fitted_dropout")}  # fmt: skip
     report = {"decoder": str(args.decoder), "state": "closed (commanded: open)", "objects": "training",
-              "code_fit_steps": CODE_FIT_STEPS, "summary": summary, "rows": rows}  # fmt: skip
+              "code_fit_steps": CODE_FIT_STEPS, "fit_dropout": args.fit_dropout,
+              "summary": summary, "rows": rows}  # fmt: skip
     atomic_write_json(args.out, report)
     print(json.dumps(summary, indent=1))
     return 0

@@ -77,3 +77,23 @@ def test_fit_starts_from_a_given_code():
     _, _, loss_zero = fit_code(dec, obs, cfg)
     assert abs(started[0] - 0.05) < 2e-3 and loss_started < 2e-3 < loss_zero
     assert np.array_equal(start, original)
+
+
+class TrainModeShiftDecoder(RadiusDecoder):
+    """RadiusDecoder whose sphere is 3 cm larger in train mode: a deterministic stand-in for dropout's effect."""
+
+    def sdf_only(self, code, joint, xyz):
+        return super().sdf_only(code, joint, xyz) - (0.03 if self.training else 0.0)
+
+
+def test_fit_under_dropout_sees_the_train_mode_decoder_and_restores_the_mode():
+    """``CodeFitConfig.dropout`` fits the code the train-mode decoder needs (radius 0.25 = 0.2 + z + 0.03, so
+    z = 0.02, not 0.05); the reported loss is the eval-mode one, and the decoder's mode is left as found."""
+    obs = Observations.from_samples([(0.5, *_sphere_samples(0.25, 0.5))])
+    for mode in (False, True):
+        dec = TrainModeShiftDecoder().train(mode)
+        plain, _, loss_plain = fit_code(dec, obs, CodeFitConfig(steps=300, lr=1e-2))
+        dropped, _, loss_dropped = fit_code(dec, obs, CodeFitConfig(steps=300, lr=1e-2, dropout=True))
+        assert abs(plain[0] - 0.05) < 0.005 and abs(dropped[0] - 0.02) < 0.005
+        assert loss_plain < 2e-3 < 5e-3 < loss_dropped  # measured without the train-mode shift: 3 cm off
+        assert dec.training is mode

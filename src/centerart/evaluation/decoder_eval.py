@@ -242,14 +242,18 @@ def _object_code(loaded, oid: str, trained: bool, states: list, cfg: EvalDecoder
     return loaded.code(oid) if trained else fitted_code(loaded, states, cfg.code_fit_steps, cfg.seed)
 
 
-def fitted_code(loaded, states: list, steps: int, seed: int, points_per_step: int = 4096) -> np.ndarray:
+def fitted_code(
+    loaded, states: list, steps: int, seed: int, points_per_step: int = 4096, dropout: bool = False
+) -> np.ndarray:
     """A shape code fitted to all of one object's SDF samples (each with ``joint``, ``points``, ``sdf`` as
     ``sdf.samples.StateData``), the decoder of ``loaded`` (a ``LoadedDecoder``) frozen, under the code prior it was
-    trained with."""
+    trained with (and, with ``dropout``, under the decoder's dropout: ``CodeFitConfig.dropout``)."""
     from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
 
     obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
-    cfg = CodeFitConfig(steps=steps, points_per_step=points_per_step, code_weight=loaded.code_weight, seed=seed)
+    cfg = CodeFitConfig(
+        steps=steps, points_per_step=points_per_step, code_weight=loaded.code_weight, seed=seed, dropout=dropout
+    )
     return fit_code(loaded.decoder, obs, cfg)[0]
 
 

@@ -33,6 +33,9 @@ class CodeFitConfig:
     seed: int = 0
     joint_starts: tuple[float, ...] = (0.15, 0.5, 0.85)
     """Initial joint codes tried when the joint is unknown (the best fit wins)."""
+    dropout: bool = False
+    """Fit with the decoder's dropout on, as a run with dropout learned its training codes. Off (the default), the
+    fit sees the deterministic decoder that inference decodes with."""
 
 
 @dataclass
@@ -90,13 +93,14 @@ def fit_code(
     """Optimise a shape code (and, with ``fit_joint``, one shared joint code) to the observations, starting from
     ``start`` (code_dim,) or the zero code (the mean of the code prior).
 
-    The decoder is frozen (no parameter is updated; its train/eval mode is left as found but dropout is
-    disabled during the fit). Returns (code (code_dim,), fitted joint code or None, final data loss).
+    The decoder is frozen (no parameter is updated; its train/eval mode is left as found; dropout is on during the
+    fit only with ``cfg.dropout``, and the final loss is always measured without it). Returns (code (code_dim,),
+    fitted joint code or None, final data loss).
     """
     device = next(decoder.parameters()).device
     was_training = decoder.training
     grad_flags = [p.requires_grad for p in decoder.parameters()]
-    decoder.eval()
+    decoder.train(cfg.dropout)
     decoder.requires_grad_(False)  # frozen: and no wasted weight gradients
     starts = cfg.joint_starts if fit_joint else (None,)
     best = None
@@ -140,10 +144,13 @@ def _fit_once(decoder, obs, cfg, j0, device, start=None):
             loss.backward()
             opt.step()
             sched.step()
+    was_training = decoder.training
+    decoder.eval()
     with torch.no_grad():
         idx = torch.arange(0, n, max(1, n // 20000), device=device)
         j = torch.sigmoid(joint_logit).expand(len(idx)) if joint_logit is not None else joint_obs[idx]
         pred = decoder.sdf_only(code.expand(len(idx), -1), j, pts[idx])
         final = float(interval_loss(pred, lo[idx], hi[idx], cfg.clamp))
+    decoder.train(was_training)
     joint_fit = float(torch.sigmoid(joint_logit)) if joint_logit is not None else None
     return code.detach().cpu().numpy().astype(np.float32), joint_fit, final
