@@ -17,7 +17,7 @@ from centerart.models.checkpoint_files import file_sha256
 from centerart.models.encoder.checkpoint import load_encoder
 from centerart.models.encoder.config import PRESETS
 from centerart.recipe.ledger import read_ledger
-from centerart.recipe.slices import learning_curve
+from centerart.recipe.slices import learning_curve, refuse_changed_settings
 from centerart.training.slice_training import load_state, new_state, save_state
 from centerart.viz.learning_curve import draw_learning_curve
 
@@ -233,3 +233,16 @@ def test_a_run_with_the_decoded_shape_term_keeps_its_weight_and_builds_the_froze
     old = {k: v for k, v in plan.loss.items() if k != "shape_sdf"}
     assert EncoderLossConfig.from_dict(old).shape_sdf == 0.0
     assert decoded_shape_of(plan, EncoderLossConfig.from_dict(old), codes) is None
+
+
+def test_a_resumed_slice_names_each_changed_setting_with_the_value_it_started_with():
+    """Left-out flags (None) pass; a flag with a default that differs is named with both values, since leaving
+    it out would not restore what the slice started with."""
+    started = {"steps": 2400, "lr_scale": 0.1, "codes_from_sdf": True}
+    refuse_changed_settings(7, started, {"steps": None, "lr_scale": 0.1, "codes_from_sdf": True})
+    with pytest.raises(CenterArtError) as err:
+        refuse_changed_settings(7, started, {"steps": None, "lr_scale": 1.0, "codes_from_sdf": False})
+    assert str(err.value) == (
+        "slice 7 started with other settings (lr_scale: 0.1 -> 1.0, codes_from_sdf: True -> False); "
+        "rerun with those it started with"
+    )

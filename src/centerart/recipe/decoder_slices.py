@@ -25,7 +25,7 @@ from typing import Literal
 
 from centerart.errors import CenterArtError
 from centerart.recipe.ledger import DECODER_LINE_FIELDS, STATE, add_call_wall, check_run_files, read_ledger
-from centerart.recipe.slices import commit_folder, compare_replay, finish_pending, load_plan
+from centerart.recipe.slices import commit_folder, compare_replay, finish_pending, load_plan, refuse_changed_settings
 from centerart.utils.checks import at_least, between, positive
 from centerart.utils.torch_cpu import use_cpu_threads
 
@@ -215,10 +215,10 @@ def slice_settings(plan: DecoderSlicePlan, cfg: DecoderSlicesConfig, index: int,
     from centerart.utils.manifest import code_version
 
     if saved is not None:
-        given = (("steps", cfg.steps), ("lr_scale", cfg.lr_scale), ("codes_from_sdf", cfg.codes_from_sdf))
-        differ = [k for k, v in given if v is not None and v != saved.get(k, False)]
-        if differ:
-            raise CenterArtError(f"slice {index} started with other settings ({', '.join(differ)}); rerun without them")
+        started = {"steps": saved["steps"], "lr_scale": saved["lr_scale"],
+                   "codes_from_sdf": saved.get("codes_from_sdf", False)}  # fmt: skip
+        given = {"steps": cfg.steps, "lr_scale": cfg.lr_scale, "codes_from_sdf": cfg.codes_from_sdf}
+        refuse_changed_settings(index, started, given)
         return saved
     steps = plan.steps if cfg.steps is None else cfg.steps
     settings = {"slice": index, "steps": steps, "batch_size": plan.batch_items, "lr_scale": float(cfg.lr_scale),

@@ -345,13 +345,19 @@ def slice_settings(plan: SlicePlan, cfg: SlicesNextConfig, index: int, saved: di
 
         return settings | {"code_version": code_version()}  # the code that starts the slice
     given = {"steps": cfg.steps, **{k: getattr(cfg, k) for k in ("kitchen", "single", "intrinsics", "depth")}}
-    now = {"steps": saved["steps"], **saved["data"]}
-    differ = [k for k, v in given.items() if v is not None and v != now[k]]
-    if cfg.lr_scale != saved["lr_scale"]:
-        differ.append("lr_scale")
-    if differ:
-        raise CenterArtError(f"slice {index} started with other settings ({', '.join(differ)}); rerun without them")
+    given["lr_scale"] = cfg.lr_scale  # never None: an omitted --lr-scale is 1.0, so it must be repeated
+    refuse_changed_settings(index, {"steps": saved["steps"], **saved["data"], "lr_scale": saved["lr_scale"]}, given)
     return saved
+
+
+def refuse_changed_settings(index: int, started: dict, given: dict) -> None:
+    """One-line error when a resumed slice ``index`` is given (``given``: None = left out) other settings than
+    those it ``started`` with. Each is named with both values: flags with a default (``--lr-scale``) count as
+    that default when left out, so "leave them out" would not do."""
+    changed = {k: (started[k], v) for k, v in given.items() if v is not None and v != started[k]}
+    if changed:
+        listed = ", ".join(f"{k}: {old} -> {new}" for k, (old, new) in changed.items())
+        raise CenterArtError(f"slice {index} started with other settings ({listed}); rerun with those it started with")
 
 
 def encoder_config(plan: SlicePlan, codes: dict):
