@@ -72,7 +72,7 @@ def fit_variant(
 
 def object_rows(loaded, folder: Path, states: list, variants: list[str], train_codes: np.ndarray, seed: int) -> list:
     obj = ArticulatedObject.load(folder)
-    obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
+    obs = Observations.from_states(states)
     # Ranked once per object, shared by every variant that starts from a training code; its time counts in each.
     ranked, rank_seconds = None, 0.0
     if any(not name.startswith("zero") for name in variants):

@@ -97,3 +97,13 @@ def test_fit_under_dropout_sees_the_train_mode_decoder_and_restores_the_mode():
         assert abs(plain[0] - 0.05) < 0.005 and abs(dropped[0] - 0.02) < 0.005
         assert loss_plain < 2e-3 < 5e-3 < loss_dropped  # measured without the train-mode shift: 3 cm off
         assert dec.training is mode
+
+
+def test_observations_from_states_equal_those_from_their_samples():
+    from centerart.sdf.samples import StateData
+
+    p, s = _sphere_samples(0.25, 0.5, n=50)
+    fields = {f: None for f in StateData.__dataclass_fields__}
+    states = [StateData(**(fields | {"joint": j, "points": p + j, "sdf": s})) for j in (0.0, 1.0)]
+    a, b = Observations.from_states(states), Observations.from_samples([(0.0, p, s), (1.0, p + 1.0, s)])
+    assert all(np.array_equal(getattr(a, k), getattr(b, k)) for k in ("points", "lower", "upper", "joint"))

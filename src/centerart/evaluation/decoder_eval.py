@@ -250,7 +250,7 @@ def fitted_code(
     trained with (and, with ``dropout``, under the decoder's dropout: ``CodeFitConfig.dropout``)."""
     from centerart.models.code_fitting import CodeFitConfig, Observations, fit_code
 
-    obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
+    obs = Observations.from_states(states)
     cfg = CodeFitConfig(
         steps=steps, points_per_step=points_per_step, code_weight=loaded.code_weight, seed=seed, dropout=dropout
     )

@@ -56,6 +56,12 @@ class Observations:
         return cls(pts, sdf, sdf.copy(), joint)
 
     @classmethod
+    def from_states(cls, states: list) -> Observations:
+        """From full SDF samples of ONE object given as states with ``joint``, ``points`` and ``sdf``
+        (``sdf.samples.StateData``)."""
+        return cls.from_samples([(s.joint, s.points, s.sdf) for s in states])
+
+    @classmethod
     def from_depth(
         cls,
         surface_points: np.ndarray,

@@ -175,7 +175,7 @@ def refit_training_codes(state: DecoderTrainState, train_states: list[StateData]
     weight = module.codes.weight
     moved = []
     for row, oid in enumerate(tqdm(module.object_ids, desc="refit codes", disable=not progress)):
-        obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in by_obj[oid]])
+        obs = Observations.from_states(by_obj[oid])
         code = torch.as_tensor(fit_code(module.decoder, obs, cfg)[0])
         with torch.no_grad():
             moved.append(float((weight[row] - code).norm()))

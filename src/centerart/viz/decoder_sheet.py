@@ -71,7 +71,7 @@ def _shape_code(loaded, cfg: ShowDecoderConfig) -> tuple[np.ndarray, str]:
     if not folder.is_dir():
         raise CenterArtError(f"{folder}: object not in the checkpoint and no SDF samples to fit a code")
     states = [s for s in load_states(cfg.data, 20000, progress=False) if s.object_id == cfg.object]
-    obs = Observations.from_samples([(s.joint, s.points, s.sdf) for s in states])
+    obs = Observations.from_states(states)
     code, _, _ = fit_code(loaded.decoder, obs, CodeFitConfig())
     return code, "fitted code (decoder frozen)"
 
