@@ -43,10 +43,12 @@ def test_eval_decoder_cli_writes_a_complete_report(tmp_path):
             "64",
             "--code-fit-steps",
             "20",
+            "--code-fit-dropout",
         ]
     )
     assert code == 0 and (out / "report.png").stat().st_size > 10_000
     report = json.loads((out / "report.json").read_text())
+    assert report["config"]["code_fit_dropout"] is True  # recorded beside the figures it changes
     row = report["summary"]["train"]
     assert row["states"] >= 1
     assert math.isfinite(row["chamfer_mm"]) and row["chamfer_mm"] < 150.0

@@ -77,6 +77,9 @@ class EvalDecoderConfig:
     top_k_coverage: int = 20
     resolution: int = 128
     code_fit_steps: int = 200
+    code_fit_dropout: bool = False
+    """Fit each object's code under the decoder's dropout (``CodeFitConfig.dropout``), as a run with dropout
+    learned its training codes; off, the fit sees the deterministic decoder (as the slices' held-out figures)."""
     seed: int = 0
     max_objects: int | None = None
     grasp_critic: bool = True
@@ -239,7 +242,9 @@ def _jobs(loaded, by_obj: dict[str, list], trained_ids: set[str], cfg: EvalDecod
 
 def _object_code(loaded, oid: str, trained: bool, states: list, cfg: EvalDecoderConfig) -> np.ndarray:
     """The trained shape code, or one fitted to all the object's SDF samples with the decoder frozen."""
-    return loaded.code(oid) if trained else fitted_code(loaded, states, cfg.code_fit_steps, cfg.seed)
+    if trained:
+        return loaded.code(oid)
+    return fitted_code(loaded, states, cfg.code_fit_steps, cfg.seed, dropout=cfg.code_fit_dropout)
 
 
 def fitted_code(
