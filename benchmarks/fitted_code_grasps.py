@@ -58,6 +58,7 @@ def closed_row(loaded, work: Path, oid: str, states: list, seed: int, fit_dropou
         top = list(found.poses[:5])
         row[name] = execute_all(obj, q, top)
         row[f"{name}_top_offset"] = label_offset(top[0], labels) if top and len(labels) else None
+        row[f"{name}_code_distance"] = round(float(np.linalg.norm(code - codes["trained"])), 4)
     return row
 
 
