@@ -77,7 +77,8 @@ def object_rows(ctx, v, decoders: list[tuple[str, str]], cfg: dict, codes: dict)
             p = predictor(path, cfg["grasps"])
             p.gravity = gravity
             if (name, k) not in codes:
-                codes[(name, k)] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], seed=k)
+                dropout = name in cfg["fit_dropout"]
+                codes[(name, k)] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], k, dropout)
             pred = p.predict_detection(true_detection(obj, v.instances, codes[(name, k)]), v.rgb, v.depth, v.K)
             trial = top_grasp_trial(ctx, v, k, pred.grasp_poses)
             row[name] = {"sr": bool(trial["sr"]), "abort": trial["sr_abort"], "rsr": bool(trial["rsr"])}
@@ -162,6 +163,8 @@ def parse(argv=None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenes", type=Path, nargs="+", required=True, help="scene folders (objects no decoder saw)")
     p.add_argument("--decoders", nargs="*", default=[], help="NAME=DECODER.pt; the first is the reference")
+    p.add_argument("--oracle-fit-dropout", nargs="*", default=[], metavar="NAME",
+                   help="decoders whose oracle codes are fitted under dropout (CodeFitConfig.dropout)")  # fmt: skip
     p.add_argument("--references", action="store_true", help="also the baseline and a label executed, per view")
     p.add_argument("--out", type=Path, required=True, help="records (resumable) and report.json")
     p.add_argument("--labels-from", type=Path, default=None, help="an eval-scenes output whose labels/ are reused")
@@ -187,6 +190,9 @@ def parse(argv=None) -> argparse.Namespace:
     for name, path in args.decoders:
         if not name or not Path(path).is_file():
             p.error(f"--decoders: {name}={path}: expected NAME=FILE with an existing decoder checkpoint")
+    unknown = sorted(set(args.oracle_fit_dropout) - {name for name, _ in args.decoders})
+    if unknown:
+        p.error(f"--oracle-fit-dropout: {', '.join(unknown)}: not a NAME of --decoders")
     return args
 
 
@@ -242,7 +248,7 @@ def main(argv=None) -> int:
         shutil.copytree(args.labels_from / "labels", args.out / "labels")
     defaults = EvalScenesConfig(scenes=(), out=args.out)
     cfg = {"depth": tuple(args.depth), "grasps": args.grasps, "ablation": False, "seed": defaults.seed,
-           "references": args.references,
+           "references": args.references, "fit_dropout": tuple(args.oracle_fit_dropout),
            "labels_per_state": defaults.labels_per_state, "label_max_trials": defaults.label_max_trials}  # fmt: skip
     jobs = [(name, str(d), str(args.out), decoders, cfg) for name, dirs in sets.items() for d in dirs]
     started = time.perf_counter()
@@ -251,7 +257,8 @@ def main(argv=None) -> int:
     wall_s = round(time.perf_counter() - started, 1)
     named = decoders + ([(r, "reference") for r in ("baseline", "label")] if args.references else [])
     report = {"scenes": [str(s) for s in args.scenes], "grasps": args.grasps, "depth": args.depth,
-              "wall_s_this_run": wall_s, "decoders": summary(args.out, named)}  # fmt: skip
+              "oracle_fit_dropout": args.oracle_fit_dropout, "wall_s_this_run": wall_s,
+              "decoders": summary(args.out, named)}  # fmt: skip
     if args.against is not None:
         report["against"] = against(args.out, [n for n, _ in decoders], args.against, args.against_columns)
     emit(report, args.out / "report.json")

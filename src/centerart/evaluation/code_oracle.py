@@ -36,16 +36,17 @@ class _StateSamples(NamedTuple):
     sdf: np.ndarray  # (N,) m
 
 
-def oracle_code(loaded, obj: ArticulatedObject, q: float, seed: int) -> np.ndarray:
+def oracle_code(loaded, obj: ArticulatedObject, q: float, seed: int, dropout: bool = False) -> np.ndarray:
     """A shape code (code_dim,) fitted to ``obj``'s true surface at joint state ``q`` (m or rad), the decoder of
-    ``loaded`` (a ``LoadedDecoder``) frozen; deterministic given ``seed``."""
+    ``loaded`` (a ``LoadedDecoder``) frozen (with ``dropout``: fitted under its dropout, ``CodeFitConfig.dropout``);
+    deterministic given ``seed``."""
     rng = np.random.default_rng(seed)
     surface = object_surface(obj, q)
     sampling = SamplingConfig()
     points = sample_points(surface.mesh, ORACLE_CODE_FIT["samples"], sampling, rng)
     signed = signed_distance(surface, points, sampling, rng)
     state = _StateSamples(float(obj.normalize(q)), signed.points, signed.sdf)
-    return fitted_code(loaded, [state], ORACLE_CODE_FIT["steps"], seed, ORACLE_CODE_FIT["points_per_step"])
+    return fitted_code(loaded, [state], ORACLE_CODE_FIT["steps"], seed, ORACLE_CODE_FIT["points_per_step"], dropout)
 
 
 def true_detection(obj: dict, instances: np.ndarray, shape_code: np.ndarray) -> Detection:
