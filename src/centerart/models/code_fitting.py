@@ -106,7 +106,6 @@ def fit_code(
     device = next(decoder.parameters()).device
     was_training = decoder.training
     grad_flags = [p.requires_grad for p in decoder.parameters()]
-    decoder.train(cfg.dropout)
     decoder.requires_grad_(False)  # frozen: and no wasted weight gradients
     starts = cfg.joint_starts if fit_joint else (None,)
     best = None
@@ -123,6 +122,7 @@ def fit_code(
 
 
 def _fit_once(decoder, obs, cfg, j0, device, start=None):
+    decoder.train(cfg.dropout)  # the fit's steps see dropout only with cfg.dropout; fit_code restores the mode
     gen = torch.Generator().manual_seed(cfg.seed)
     pts = torch.as_tensor(obs.points, device=device)
     lo = torch.as_tensor(obs.lower, device=device)
@@ -150,13 +150,11 @@ def _fit_once(decoder, obs, cfg, j0, device, start=None):
             loss.backward()
             opt.step()
             sched.step()
-    was_training = decoder.training
-    decoder.eval()
+    decoder.eval()  # the final loss always without dropout
     with torch.no_grad():
         idx = torch.arange(0, n, max(1, n // 20000), device=device)
         j = torch.sigmoid(joint_logit).expand(len(idx)) if joint_logit is not None else joint_obs[idx]
         pred = decoder.sdf_only(code.expand(len(idx), -1), j, pts[idx])
         final = float(interval_loss(pred, lo[idx], hi[idx], cfg.clamp))
-    decoder.train(was_training)
     joint_fit = float(torch.sigmoid(joint_logit)) if joint_logit is not None else None
     return code.detach().cpu().numpy().astype(np.float32), joint_fit, final

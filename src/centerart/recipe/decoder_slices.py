@@ -215,10 +215,9 @@ def slice_settings(plan: DecoderSlicePlan, cfg: DecoderSlicesConfig, index: int,
     from centerart.utils.manifest import code_version
 
     if saved is not None:
-        started = {"steps": saved["steps"], "lr_scale": saved["lr_scale"],
-                   "codes_from_sdf": saved.get("codes_from_sdf", False)}  # fmt: skip
         given = {"steps": cfg.steps, "lr_scale": cfg.lr_scale, "codes_from_sdf": cfg.codes_from_sdf}
-        refuse_changed_settings(index, started, given)
+        # codes_from_sdf is absent from lines made without it
+        refuse_changed_settings(index, {k: saved.get(k, False) for k in given}, given)
         return saved
     steps = plan.steps if cfg.steps is None else cfg.steps
     settings = {"slice": index, "steps": steps, "batch_size": plan.batch_items, "lr_scale": float(cfg.lr_scale),
