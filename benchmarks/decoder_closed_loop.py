@@ -15,7 +15,8 @@ objects). It is an upper bound for what an encoder could get from each decoder, 
     PYTHONPATH=src:benchmarks python benchmarks/decoder_closed_loop.py --scenes DEV/single --out OUT \\
         --decoders shipped=src/centerart/weights/sgdf_small.pt \\
         reg=training_runs/decoder-small-102-paper-reg/decoder.pt \\
-        [--labels-from EVAL_OUT] [--grasps pose] [--depth realistic] [--max-scenes N] [--workers 2]
+        [--labels-from EVAL_OUT] [--grasps pose] [--depth realistic] [--max-scenes N] [--workers 2] \\
+        [--oracle-fit-dropout NAME...] [--critic NAME...]
     # DEV/single: scenes of objects no decoder trained on (refused otherwise); EVAL_OUT: a `centerart eval scenes`
     # output on the same scenes whose cached ground-truth labels are reused (else they are generated into OUT);
     # OUT/records/<set>/<scene>.json: one record per scene (a rerun skips it: resumable)
@@ -37,15 +38,16 @@ from centerart.inference.grasp_anchoring import LADDER
 _PREDICTORS: dict = {}
 
 
-def predictor(decoder: str, grasps: str):
-    """The encoder-less predictor of one decoder and grasp setting (critics off: no run decoder has one), cached."""
+def predictor(decoder: str, grasps: str, critic: bool = False):
+    """The encoder-less predictor of one decoder and grasp setting, cached; ``critic``: ranking with the grasp
+    critic beside the checkpoint (``--critic``), else without one (the run decoders have none)."""
     from centerart.inference.grasp_anchoring import ladder_predictor_settings
     from centerart.inference.predictor import Predictor, PredictorConfig
 
-    if (decoder, grasps) not in _PREDICTORS:
-        config = PredictorConfig(grasp_critic=False, **ladder_predictor_settings(grasps))
-        _PREDICTORS[(decoder, grasps)] = Predictor.without_encoder(decoder, config=config)
-    return _PREDICTORS[(decoder, grasps)]
+    if (decoder, grasps, critic) not in _PREDICTORS:
+        config = PredictorConfig(grasp_critic=critic, **ladder_predictor_settings(grasps))
+        _PREDICTORS[(decoder, grasps, critic)] = Predictor.without_encoder(decoder, config=config)
+    return _PREDICTORS[(decoder, grasps, critic)]
 
 
 def reference_outcomes(ctx, v, seed: int) -> dict[int, dict]:
@@ -74,7 +76,7 @@ def object_rows(ctx, v, decoders: list[tuple[str, str]], cfg: dict, codes: dict)
         row = {"scene": v.scene, "view": v.view, "depth": v.depth_mode, "instance": k, "object_id": obj["object_id"],
                "category": obj["category"], "state_normalized": obj["joint"]["state_normalized"]}  # fmt: skip
         for name, path in decoders:
-            p = predictor(path, cfg["grasps"])
+            p = predictor(path, cfg["grasps"], name in cfg["critic"])
             p.gravity = gravity
             if (name, k) not in codes:
                 dropout = name in cfg["fit_dropout"]
@@ -165,6 +167,8 @@ def parse(argv=None) -> argparse.Namespace:
     p.add_argument("--decoders", nargs="*", default=[], help="NAME=DECODER.pt; the first is the reference")
     p.add_argument("--oracle-fit-dropout", nargs="*", default=[], metavar="NAME",
                    help="decoders whose oracle codes are fitted under dropout (CodeFitConfig.dropout)")  # fmt: skip
+    p.add_argument("--critic", nargs="*", default=[], metavar="NAME",
+                   help="decoders ranked by the critic beside their checkpoint (CHECKPOINT.critic.json)")  # fmt: skip
     p.add_argument("--references", action="store_true", help="also the baseline and a label executed, per view")
     p.add_argument("--out", type=Path, required=True, help="records (resumable) and report.json")
     p.add_argument("--labels-from", type=Path, default=None, help="an eval-scenes output whose labels/ are reused")
@@ -190,9 +194,14 @@ def parse(argv=None) -> argparse.Namespace:
     for name, path in args.decoders:
         if not name or not Path(path).is_file():
             p.error(f"--decoders: {name}={path}: expected NAME=FILE with an existing decoder checkpoint")
-    unknown = sorted(set(args.oracle_fit_dropout) - {name for name, _ in args.decoders})
-    if unknown:
-        p.error(f"--oracle-fit-dropout: {', '.join(unknown)}: not a NAME of --decoders")
+    paths = dict(args.decoders)
+    for flag, names in (("--oracle-fit-dropout", args.oracle_fit_dropout), ("--critic", args.critic)):
+        unknown = sorted(set(names) - set(paths))
+        if unknown:
+            p.error(f"{flag}: {', '.join(unknown)}: not a NAME of --decoders")
+    for name in args.critic:
+        if not Path(f"{paths[name]}.critic.json").is_file():
+            p.error(f"--critic: {name}: no grasp critic beside {paths[name]} ({paths[name]}.critic.json)")
     return args
 
 
@@ -248,7 +257,7 @@ def main(argv=None) -> int:
         shutil.copytree(args.labels_from / "labels", args.out / "labels")
     defaults = EvalScenesConfig(scenes=(), out=args.out)
     cfg = {"depth": tuple(args.depth), "grasps": args.grasps, "ablation": False, "seed": defaults.seed,
-           "references": args.references, "fit_dropout": tuple(args.oracle_fit_dropout),
+           "references": args.references, "fit_dropout": tuple(args.oracle_fit_dropout), "critic": tuple(args.critic),
            "labels_per_state": defaults.labels_per_state, "label_max_trials": defaults.label_max_trials}  # fmt: skip
     jobs = [(name, str(d), str(args.out), decoders, cfg) for name, dirs in sets.items() for d in dirs]
     started = time.perf_counter()
@@ -257,7 +266,7 @@ def main(argv=None) -> int:
     wall_s = round(time.perf_counter() - started, 1)
     named = decoders + ([(r, "reference") for r in ("baseline", "label")] if args.references else [])
     report = {"scenes": [str(s) for s in args.scenes], "grasps": args.grasps, "depth": args.depth,
-              "oracle_fit_dropout": args.oracle_fit_dropout, "wall_s_this_run": wall_s,
+              "oracle_fit_dropout": args.oracle_fit_dropout, "critic": args.critic, "wall_s_this_run": wall_s,
               "decoders": summary(args.out, named)}  # fmt: skip
     if args.against is not None:
         report["against"] = against(args.out, [n for n, _ in decoders], args.against, args.against_columns)

@@ -13,6 +13,7 @@ one object set, measure its ranking and calibration on another. Prints JSON.
     # the predictor's 48-cell lattice (its grasps come from a coarser reconstruction)
     python benchmarks/grasp_critic.py collect --objects test_objects --sdf test_sdf --states 0,1 --resolution 48 \
         --out test48
+    # a decoder trained under dropout (a run's): fit its codes under it too (--fit-dropout, recorded per file)
 
 A state's top-1 is the first grasp of a ranking, a failure when the state has no grasp (missing counts).
 """
@@ -58,7 +59,7 @@ def collect(args) -> dict:
         if path.is_file():
             continue
         obj = ArticulatedObject.load(args.objects / oid)
-        code = fitted_code(loaded, by_object[oid], args.fit_steps, args.seed)
+        code = fitted_code(loaded, by_object[oid], args.fit_steps, args.seed, dropout=args.fit_dropout)
         rows = []
         for u in states:
             q = obj.denormalize(u)
@@ -68,8 +69,8 @@ def collect(args) -> dict:
             ok = execute_grasps(obj, q, g.poses, args.top_k)
             rows.append({"u": u, "chamfer_mm": chamfer, "fscore": fscore, "scores": g.scores.tolist(),
                          "features": g.features.tolist(), "ok": ok})  # fmt: skip
-        atomic_write_json(path, {"object_id": oid, "checkpoint": str(loaded.path), "feature_names": GRASP_FEATURES,
-                                 "states": rows})  # fmt: skip
+        atomic_write_json(path, {"object_id": oid, "checkpoint": str(loaded.path), "fit_dropout": args.fit_dropout,
+                                 "feature_names": GRASP_FEATURES, "states": rows})  # fmt: skip
         print(f"{oid}: top-1 {[r['ok'][:1] for r in rows]}", flush=True)
     return {"objects": len(by_object), "out": str(args.out)}
 
@@ -190,6 +191,9 @@ def main() -> None:
     ap.add_argument("--states", default="0,0.5,1", help="normalized joint codes (collect)")
     ap.add_argument("--top-k", type=int, default=10)
     ap.add_argument("--fit-steps", type=int, default=200)
+    ap.add_argument(
+        "--fit-dropout", action="store_true", help="collect: fit the codes under the decoder's dropout (CodeFitConfig)"
+    )
     ap.add_argument("--resolution", type=int, default=128, help="lattice cells of the reconstruction (predictor: 48)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--save", action="store_true", help="fit: write the critic beside the checkpoint")
