@@ -78,10 +78,10 @@ def object_rows(ctx, v, decoders: list[tuple[str, str]], cfg: dict, codes: dict)
         for name, path in decoders:
             p = predictor(path, cfg["grasps"], name in cfg["critic"])
             p.gravity = gravity
-            if (name, k) not in codes:
-                dropout = name in cfg["fit_dropout"]
-                codes[(name, k)] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], k, dropout)
-            pred = p.predict_detection(true_detection(obj, v.instances, codes[(name, k)]), v.rgb, v.depth, v.K)
+            key = (path, name in cfg["fit_dropout"], k)  # one fit per decoder file and fit: --critic pairs share it
+            if key not in codes:
+                codes[key] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], k, key[1])
+            pred = p.predict_detection(true_detection(obj, v.instances, codes[key]), v.rgb, v.depth, v.K)
             trial = top_grasp_trial(ctx, v, k, pred.grasp_poses)
             row[name] = {"sr": bool(trial["sr"]), "abort": trial["sr_abort"], "rsr": bool(trial["rsr"])}
         rows.append(row | refs.get(k, {}))
