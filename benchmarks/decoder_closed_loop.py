@@ -34,13 +34,14 @@ from pathlib import Path
 
 from bench_report import emit, run_main
 from centerart.inference.grasp_anchoring import LADDER
+from centerart.models.grasp_critic import critic_path
 
 _PREDICTORS: dict = {}
 
 
 def predictor(decoder: str, grasps: str, critic: bool = False):
     """The encoder-less predictor of one decoder and grasp setting, cached; ``critic``: ranking with the grasp
-    critic beside the checkpoint (``--critic``), else without one (the run decoders have none)."""
+    critic beside the checkpoint (``--critic``), else without one."""
     from centerart.inference.grasp_anchoring import ladder_predictor_settings
     from centerart.inference.predictor import Predictor, PredictorConfig
 
@@ -78,9 +79,10 @@ def object_rows(ctx, v, decoders: list[tuple[str, str]], cfg: dict, codes: dict)
         for name, path in decoders:
             p = predictor(path, cfg["grasps"], name in cfg["critic"])
             p.gravity = gravity
-            key = (path, name in cfg["fit_dropout"], k)  # one fit per decoder file and fit: --critic pairs share it
+            dropout = name in cfg["fit_dropout"]
+            key = (path, dropout, k)  # one fit per decoder file and fit: --critic pairs share it
             if key not in codes:
-                codes[key] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], k, key[1])
+                codes[key] = oracle_code(p.decoder, ctx.phys.objects[k], ctx.phys.states[k], k, dropout)
             pred = p.predict_detection(true_detection(obj, v.instances, codes[key]), v.rgb, v.depth, v.K)
             trial = top_grasp_trial(ctx, v, k, pred.grasp_poses)
             row[name] = {"sr": bool(trial["sr"]), "abort": trial["sr_abort"], "rsr": bool(trial["rsr"])}
@@ -200,8 +202,8 @@ def parse(argv=None) -> argparse.Namespace:
         if unknown:
             p.error(f"{flag}: {', '.join(unknown)}: not a NAME of --decoders")
     for name in args.critic:
-        if not Path(f"{paths[name]}.critic.json").is_file():
-            p.error(f"--critic: {name}: no grasp critic beside {paths[name]} ({paths[name]}.critic.json)")
+        if not critic_path(Path(paths[name])).is_file():
+            p.error(f"--critic: {name}: no grasp critic beside {paths[name]} ({critic_path(Path(paths[name]))})")
     return args
 
 
