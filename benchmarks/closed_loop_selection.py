@@ -13,6 +13,8 @@ that only the encoders differ; then every encoder's SR by image association per 
     # eval_scenes_s24/README.md makes 400 of 200 new objects); OUT/<name>/ holds each evaluation (resumable)
     PYTHONPATH=src:benchmarks python benchmarks/closed_loop_selection.py --make-sets SETS --out OUT --decoder D \
         --encoders ...   # instead of --scenes: the two selection sets of sessions 24-31, made in SETS if missing
+    ... --encoders plain=E.pt critic=E.pt --row-decoders critic=C/decoder.pt   # one encoder, two decoders (C:
+    # a copy of the decoder with its grasp critic beside it, DECODER.critic.json)
 """
 
 from __future__ import annotations
@@ -49,15 +51,16 @@ def make_selection_sets(folder: Path, workers: int) -> list[Path]:
     return scenes
 
 
-def evaluate(name: str, encoder: Path, args, first: Path | None) -> Path:
-    """``centerart eval scenes`` of one encoder into ``OUT/name`` (the first evaluation's labels copied in)."""
+def evaluate(name: str, encoder: Path, decoder: Path | None, args, first: Path | None) -> Path:
+    """``centerart eval scenes`` of one encoder and decoder into ``OUT/name`` (the first evaluation's labels copied
+    in). A grasp critic beside the decoder file (``DECODER.critic.json``) ranks its grasps, as in the predictor."""
     from centerart.evaluation.scene_eval import EvalScenesConfig, evaluate_scenes
 
     out = args.out / name
     if first is not None and (first / "labels").is_dir() and not (out / "labels").exists():
         shutil.copytree(first / "labels", out / "labels")
     evaluate_scenes(EvalScenesConfig(
-        scenes=tuple(args.scenes), out=out, encoder=encoder, decoder=args.decoder, depth=("realistic",),
+        scenes=tuple(args.scenes), out=out, encoder=encoder, decoder=decoder, depth=("realistic",),
         grasps=(args.grasps,), oracle=False, baseline=False, shape=False, ablation=False,
         workers=args.workers,
     ))  # fmt: skip
@@ -79,6 +82,9 @@ def main() -> None:
     where.add_argument("--make-sets", type=Path, help="make (or resume) the two selection sets here and use them")
     p.add_argument("--encoders", nargs="+", required=True, help="NAME=ENCODER.pt; the first is the reference")
     p.add_argument("--decoder", type=Path, default=None, help="the decoder all encoders regress codes of")
+    p.add_argument("--row-decoders", nargs="+", default=[], metavar="NAME=DECODER.pt",
+                   help="a decoder for one row instead of --decoder (e.g. a copy with a grasp critic beside it), so "
+                   "that one encoder can be paired with two decoders")  # fmt: skip
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--grasps", default="pose", choices=["pose", "full"],
@@ -88,12 +94,16 @@ def main() -> None:
     if args.make_sets is not None:
         args.scenes = make_selection_sets(args.make_sets, args.workers)
     named = [e.partition("=")[::2] for e in args.encoders]
+    row_decoders = dict(d.partition("=")[::2] for d in args.row_decoders)
+    if unknown := sorted(set(row_decoders) - {name for name, _ in named}):
+        p.error(f"--row-decoders: {unknown} are not rows of --encoders")
     report: dict = {"scenes": [str(s) for s in args.scenes], "decoder": str(args.decoder), "encoders": {}}
     first, reference = None, None  # the first evaluation's folder (its labels) and outcomes, read once
     for name, path in named:
-        out = evaluate(name, Path(path), args, first)
+        decoder = Path(row_decoders[name]) if name in row_decoders else args.decoder
+        out = evaluate(name, Path(path), decoder, args, first)
         outcomes = read_outcomes(out)
-        entry = {"file": path, "sets": success_rates(outcomes)}
+        entry = {"file": path, "decoder": str(decoder), "sets": success_rates(outcomes)}
         if reference is not None:
             entry["paired_with_first"] = paired_table(reference, outcomes)["sets"]
         else:
