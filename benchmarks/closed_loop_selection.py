@@ -15,6 +15,8 @@ that only the encoders differ; then every encoder's SR by image association per 
         --encoders ...   # instead of --scenes: the two selection sets of sessions 24-31, made in SETS if missing
     ... --encoders plain=E.pt critic=E.pt --row-decoders critic=C/decoder.pt   # one encoder, two decoders (C:
     # a copy of the decoder with its grasp critic beside it, DECODER.critic.json)
+    ... --against benchmarks/results/decoder_closed_loop/rows.jsonl --against-columns shipped shippedc
+    # each encoder paired with those decoders given the true detection on the same views: what the encoder costs
 """
 
 from __future__ import annotations
@@ -75,6 +77,7 @@ def success_rates(outcomes: dict) -> dict:
 
 def main() -> None:
     from centerart.evaluation.paired import paired_table, read_outcomes
+    from decoder_closed_loop import against_rows, bare_key
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     where = p.add_mutually_exclusive_group(required=True)
@@ -85,12 +88,18 @@ def main() -> None:
     p.add_argument("--row-decoders", nargs="+", default=[], metavar="NAME=DECODER.pt",
                    help="a decoder for one row instead of --decoder (e.g. a copy with a grasp critic beside it), so "
                    "that one encoder can be paired with two decoders")  # fmt: skip
+    p.add_argument("--against", type=Path, default=None, metavar="ROWS.jsonl",
+                   help="a decoder_closed_loop.py rows file of the same scenes (decoders given the true detection): "
+                   "each encoder paired with its --against-columns, which is what the encoder costs")  # fmt: skip
+    p.add_argument("--against-columns", nargs="*", default=[], help="columns of --against, e.g. shipped shippedc")
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--grasps", default="pose", choices=["pose", "full"],
                    help="pose: centerart[pose] (the pose corrected from the depth first; the selections so far); "
                    "full: without that correction")  # fmt: skip
     args = p.parse_args()
+    if args.against is not None and not args.against.is_file():
+        p.error(f"--against: {args.against}: no such rows file")
     if args.make_sets is not None:
         args.scenes = make_selection_sets(args.make_sets, args.workers)
     named = [e.partition("=")[::2] for e in args.encoders]
@@ -99,6 +108,7 @@ def main() -> None:
         p.error(f"--row-decoders: {unknown} are not rows of --encoders")
     report: dict = {"scenes": [str(s) for s in args.scenes], "decoder": str(args.decoder), "encoders": {}}
     first, reference = None, None  # the first evaluation's folder (its labels) and outcomes, read once
+    mine: dict[str, dict] = {}  # name -> outcomes keyed as decoder_closed_loop's rows (for --against)
     for name, path in named:
         decoder = Path(row_decoders[name]) if name in row_decoders else args.decoder
         out = evaluate(name, Path(path), decoder, args, first)
@@ -109,6 +119,9 @@ def main() -> None:
         else:
             first, reference = out, outcomes
         report["encoders"][name] = entry
+        mine[name] = {bare_key(k): v for k, v in outcomes.items()}
+    if args.against is not None:
+        report["against"] = against_rows(mine, args.against, args.against_columns)
     emit(report, args.out / "selection.json")
 
 

@@ -207,36 +207,42 @@ def parse(argv=None) -> argparse.Namespace:
     return args
 
 
-def _unhashed(key: tuple) -> tuple:
-    """A row key with its set's name stripped of the folder hash (``set_key``), so that the same scenes generated
-    in another folder or on another machine pair up."""
-    return (key[0].rsplit("-", 1)[0], *key[1:])
+def bare_key(key: tuple) -> tuple:
+    """A row key without its method, and with its set's name stripped of the folder hash (``set_key``): (set, scene,
+    view, depth, instance, object id), so that the same scenes generated in another folder or on another machine
+    pair up, and a decoder given the detection pairs with an encoder's predictions (``closed_loop_selection.py``)."""
+    return (key[0].rsplit("-", 1)[0], *key[1:4], *key[5:])
 
 
-def against(out: Path, names: list[str], rows_file: Path, columns: list[str]) -> dict:
-    """Each decoder of this run paired with each column of an earlier run's ``rows.jsonl`` on the views both hold
-    (same scenes, outcomes by name: "success" counts), plus each side's successes on those views."""
+def against_rows(mine: dict[str, dict], rows_file: Path, columns: list[str]) -> dict:
+    """Each of ``mine`` (name -> outcomes keyed by :func:`bare_key`) paired with each column of an earlier run's
+    ``rows.jsonl`` on the views both hold (same scenes, outcomes by name: "success" counts), plus each side's
+    successes on those views."""
     from centerart.evaluation.paired import paired_table
 
     earlier = [json.loads(line) for line in rows_file.read_text().splitlines() if line.strip()]
     keys = ("set", "scene", "view", "depth")
-    rows = read_rows(out)
-    mine = {n: {_unhashed(k): v for k, v in outcomes(rows, n).items()} for n in names}
     report = {}
     for col in columns:
         theirs = {
-            _unhashed((*(r.get(k, "realistic") for k in keys), "oracle-code", r["instance"], r["object_id"])): (
-                r[col] == "success"
-            )
+            bare_key((*(r.get(k, "realistic") for k in keys), "", r["instance"], r["object_id"])): r[col] == "success"
             for r in earlier
             if col in r
         }
-        for n in names:
-            common = set(mine[n]) & set(theirs)
+        for n, outcome in mine.items():
+            common = set(outcome) & set(theirs)
+            mine_name = n if n != col else f"{n} (this run)"  # an encoder row named as the decoder column
             report[f"{col} / {n}"] = {"views": len(common), col: sum(theirs[k] for k in common),
-                                      n: sum(mine[n][k] for k in common),
-                                      "paired": paired_table(theirs, mine[n])}  # fmt: skip
+                                      mine_name: sum(outcome[k] for k in common),
+                                      "paired": paired_table(theirs, outcome)}  # fmt: skip
     return report
+
+
+def against(out: Path, names: list[str], rows_file: Path, columns: list[str]) -> dict:
+    """This run's decoders (:func:`against_rows`) against the columns of an earlier run's ``rows.jsonl``."""
+    rows = read_rows(out)
+    mine = {n: {bare_key(k): v for k, v in outcomes(rows, n).items()} for n in names}
+    return against_rows(mine, rows_file, columns)
 
 
 def main(argv=None) -> int:
