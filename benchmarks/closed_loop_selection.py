@@ -106,6 +106,8 @@ def main() -> None:
     row_decoders = dict(d.partition("=")[::2] for d in args.row_decoders)
     if unknown := sorted(set(row_decoders) - {name for name, _ in named}):
         p.error(f"--row-decoders: {unknown} are not rows of --encoders")
+    if empty := sorted(name for name, path in row_decoders.items() if not path):
+        p.error(f"--row-decoders: {empty} name no file (NAME=DECODER.pt)")
     report: dict = {"scenes": [str(s) for s in args.scenes], "decoder": str(args.decoder), "encoders": {}}
     first, reference = None, None  # the first evaluation's folder (its labels) and outcomes, read once
     mine: dict[str, dict] = {}  # name -> outcomes keyed as decoder_closed_loop's rows (for --against)
