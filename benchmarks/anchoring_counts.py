@@ -31,18 +31,18 @@ COUNTS = ("candidates_decoder", "candidates_observed", "candidates_handle", "sna
 
 
 def view_groups(eval_out: Path, against: Path | None, column: str) -> dict[str, list[tuple]]:
-    """(set, scene, view, instance) of the views lost with ``no_grasp`` (that ``column`` opened, with ``against``)
-    and of the views opened."""
+    """Row keys (``decoder_closed_loop.bare_key``: set, scene, view, depth, instance, object id) of the views lost
+    with ``no_grasp`` (that ``column`` opened, with ``against``) and of the views opened."""
     from centerart.evaluation.paired import learned_rows
+    from decoder_closed_loop import bare_key, column_outcomes, read_jsonl
 
     opened_there = None
     if against is not None:
-        rows = [json.loads(line) for line in against.read_text().splitlines() if line.strip()]
-        key = lambda r: (r["set"].rsplit("-", 1)[0], r["scene"], r["view"], r["instance"])  # noqa: E731
-        opened_there = {key(r) for r in rows if r.get(column) == "success"}
+        opened_there = {k for k, ok in column_outcomes(read_jsonl(against), column).items() if ok}
     groups: dict[str, list[tuple]] = {"no_grasp": [], "opened": []}
     for set_name, row in learned_rows(eval_out):
-        k = (set_name, row["scene"], row["view"], row["instance"])
+        keys = ("scene", "view", "depth", "method", "instance", "object_id")
+        k = bare_key((set_name, *(row[c] for c in keys)))
         if row.get("sr_image"):
             groups["opened"].append(k)
         elif row.get("sr_image_abort") == "no_grasp" and (opened_there is None or k in opened_there):
@@ -51,15 +51,16 @@ def view_groups(eval_out: Path, against: Path | None, column: str) -> dict[str, 
 
 
 def view_counts(predictor, folder: Path, k: tuple) -> dict | None:
-    """The anchoring counts, pose error and pose correction of the prediction associated with object view ``k``."""
+    """The anchoring counts, pose error and pose correction of the prediction associated with object view ``k``
+    (a :func:`view_groups` key), in the row's depth mode."""
     from centerart.evaluation.scene_eval import view_inputs
     from centerart.evaluation.scene_rows import associate_by_image
     from centerart.geometry.gravity import gravity_from_world_T_camera
     from centerart.training.encoder_metrics import object_errors
 
-    v = next(x for x in view_inputs(folder / k[1], ("realistic",)) if x.view == k[2])
+    v = next(x for x in view_inputs(folder / k[1], (k[3],)) if x.view == k[2])  # the row's depth mode
     preds = predictor.predict(v.rgb, v.depth, v.K, gravity=gravity_from_world_T_camera(v.world_T_camera))
-    j, obj = next((j, o) for j, o in v.ground_truth() if o["instance"] == k[3] + 1)
+    j, obj = next((j, o) for j, o in v.ground_truth() if o["instance"] == k[4] + 1)
     m = associate_by_image(v, preds).get(j)
     if m is None:
         return None

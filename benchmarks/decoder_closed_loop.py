@@ -214,21 +214,31 @@ def bare_key(key: tuple) -> tuple:
     return (key[0].rsplit("-", 1)[0], *key[1:4], *key[5:])
 
 
+def column_outcomes(earlier: list[dict], column: str) -> dict[tuple, bool]:
+    """One column of an earlier run's ``rows.jsonl`` rows (those that hold it): :func:`bare_key` -> "success"."""
+    keys = ("set", "scene", "view", "depth")
+    return {
+        bare_key((*(r.get(k, "realistic") for k in keys), "", r["instance"], r["object_id"])): r[column] == "success"
+        for r in earlier
+        if column in r
+    }
+
+
+def read_jsonl(rows_file: Path) -> list[dict]:
+    """The rows of a ``rows.jsonl`` file."""
+    return [json.loads(line) for line in rows_file.read_text().splitlines() if line.strip()]
+
+
 def against_rows(mine: dict[str, dict], rows_file: Path, columns: list[str]) -> dict:
     """Each of ``mine`` (name -> outcomes keyed by :func:`bare_key`) paired with each column of an earlier run's
     ``rows.jsonl`` on the views both hold (same scenes, outcomes by name: "success" counts), plus each side's
     successes on those views."""
     from centerart.evaluation.paired import paired_table
 
-    earlier = [json.loads(line) for line in rows_file.read_text().splitlines() if line.strip()]
-    keys = ("set", "scene", "view", "depth")
+    earlier = read_jsonl(rows_file)
     report = {}
     for col in columns:
-        theirs = {
-            bare_key((*(r.get(k, "realistic") for k in keys), "", r["instance"], r["object_id"])): r[col] == "success"
-            for r in earlier
-            if col in r
-        }
+        theirs = column_outcomes(earlier, col)
         for n, outcome in mine.items():
             common = set(outcome) & set(theirs)
             mine_name = n if n != col else f"{n} (this run)"  # an encoder row named as the decoder column
